@@ -1,0 +1,42 @@
+#pragma once
+/// Point-cloud and mesh files: PCD (via PCL), PLY (ASCII and binary) and XYZ text.
+///
+/// Every reader throws IoError naming the file and the problem; every writer is atomic
+/// (temporary file, fsync, rename). NaN points survive a round trip in every format.
+
+#include <string>
+
+#include "scanstop_common/cloud.h"
+
+namespace scanstop {
+
+/// Reads a cloud, choosing the format from the extension (.pcd, .ply, .xyz/.txt).
+/// PLY and PCD normals (nx ny nz / normal_x normal_y normal_z) and PCD "range" are kept;
+/// PCD organization (width x height) is kept.
+PointCloud readCloud(const std::string& path);
+
+/// Writes a cloud in the format given by the extension (.pcd binary, .ply binary, .xyz).
+void writeCloud(const std::string& path, const PointCloud& cloud);
+
+PointCloud readPcd(const std::string& path);
+void writePcd(const std::string& path, const PointCloud& cloud);
+
+/// Reads a PLY file's vertices (x y z, optional nx ny nz) and faces (vertex_indices or vertex_index).
+/// Other elements and properties are skipped. ASCII, binary_little_endian and binary_big_endian.
+TriangleMesh readPly(const std::string& path);
+/// Reads a PLY file as a cloud (its vertices and normals; faces ignored).
+PointCloud readPlyCloud(const std::string& path);
+/// Writes vertices (+ normals when present) and faces (when present) as PLY.
+void writePly(const std::string& path, const TriangleMesh& mesh, bool binary = true);
+void writePlyCloud(const std::string& path, const PointCloud& cloud, bool binary = true);
+
+/// XYZ text: one point per line, "x y z" or "x y z nx ny nz"; '#' starts a comment.
+PointCloud readXyz(const std::string& path);
+void writeXyz(const std::string& path, const PointCloud& cloud);
+
+/// Reads a mesh by extension: .stl (soup) or .ply (indexed).
+TriangleMesh readMesh(const std::string& path);
+/// Writes a mesh by extension: .stl (binary) or .ply (binary, with normals when present).
+void writeMesh(const std::string& path, const TriangleMesh& mesh);
+
+}  // namespace scanstop
