@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# The test command: sets up a fresh Debian 12 machine (as root), builds the workspace warning-free,
+# runs every gtest, rostest and launch-file check (catkin_make run_tests) and catkin_lint, and ends
+# with `tests: N passed, M failed` counted from the JUnit results. Exits non-zero on any failure,
+# build error, compiler warning or missing result.
+set -uo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+export PATH=/usr/bin:$PATH
+t0=$(date +%s)
+results="$root/build/test_results"
+pipeline="$results/_pipeline"
+
+junit() {  # junit NAME OK(0/1) MESSAGE-FILE: one JUnit test case for a pipeline step
+  mkdir -p "$pipeline"
+  local name=$1 ok=$2 msgfile=${3:-}
+  {
+    echo '<?xml version="1.0" encoding="UTF-8"?>'
+    echo "<testsuite name=\"pipeline\" tests=\"1\" failures=\"$((1 - ok))\" errors=\"0\">"
+    echo "  <testcase classname=\"pipeline\" name=\"$name\">"
+    if [[ $ok -eq 0 ]]; then
+      echo "    <failure message=\"$name failed\"><![CDATA["
+      [[ -n "$msgfile" && -f "$msgfile" ]] && tail -c 20000 "$msgfile" | sed 's/]]>/]] >/g'
+      echo "]]></failure>"
+    fi
+    echo "  </testcase>"
+    echo "</testsuite>"
+  } > "$pipeline/$name.xml"
+}
+
+bash scripts/setup.sh || { echo "tests: 0 passed, 1 failed"; exit 1; }
+t_setup=$(date +%s)
+
+rm -rf "$results"
+build_rc=0
+bash scripts/build.sh || build_rc=$?
+t_build=$(date +%s)
+if [[ $build_rc -eq 1 ]]; then
+  echo "tests: 0 passed, 1 failed"
+  exit 1
+fi
+mkdir -p "$pipeline"
+junit build_without_warnings $([[ $build_rc -eq 0 ]] && echo 1 || echo 0) logs/build.log
+
+echo "lint: catkin_lint src"
+if catkin_lint --quiet src > logs/catkin_lint.log 2>&1; then lint_ok=1; else lint_ok=0; fi
+cat logs/catkin_lint.log
+junit catkin_lint $lint_ok logs/catkin_lint.log
+
+echo "test: catkin_make run_tests (log in logs/run_tests.log)"
+catkin_make -DCATKIN_ENABLE_TESTING=ON -j1 run_tests > logs/run_tests.log 2>&1
+run_rc=$?
+junit run_tests_completed $([[ $run_rc -eq 0 ]] && echo 1 || echo 0) logs/run_tests.log
+t_test=$(date +%s)
+
+echo "times: setup $((t_setup - t0)) s, build $((t_build - t_setup)) s, tests $((t_test - t_build)) s"
+/usr/bin/python3 scripts/test_results.py "$results"
