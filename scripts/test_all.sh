@@ -47,6 +47,15 @@ if catkin_lint --quiet src > logs/catkin_lint.log 2>&1; then lint_ok=1; else lin
 cat logs/catkin_lint.log
 junit catkin_lint $lint_ok logs/catkin_lint.log
 
+# roslaunch's check on every launch file of the workspace (XML, args, packages and node executables).
+# shellcheck disable=SC1091
+source devel/setup.bash
+launch_files=$(ls launch/*.launch src/*/launch/*.launch 2>/dev/null || true)
+if [[ -n "$launch_files" ]]; then
+  # shellcheck disable=SC2086
+  /usr/bin/python3 scripts/check_launch.py "$results/_launch" $launch_files || true
+fi
+
 echo "test: catkin_make run_tests (log in logs/run_tests.log)"
 catkin_make -DCATKIN_ENABLE_TESTING=ON -j1 run_tests > logs/run_tests.log 2>&1
 run_rc=$?

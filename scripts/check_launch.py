@@ -1,0 +1,38 @@
+#!/usr/bin/python3
+"""roslaunch-check for launch files outside a package (the workspace's launch/ folder).
+
+Usage: check_launch.py OUTPUT_DIR FILE.launch [...]
+For each file, runs roslaunch's own check (XML, args, that every package and node executable exists)
+and writes one JUnit file OUTPUT_DIR/<name>.xml with one test case. Exit 1 if any check failed.
+"""
+import os
+import sys
+from xml.sax.saxutils import escape, quoteattr
+
+import roslaunch.rlutil
+
+
+def main():
+    out_dir, files = sys.argv[1], sys.argv[2:]
+    os.makedirs(out_dir, exist_ok=True)
+    failed = 0
+    for path in files:
+        name = path.replace(os.sep, "_").replace(".", "_")
+        try:
+            error = roslaunch.rlutil.check_roslaunch(path)
+        except Exception as e:  # the check itself crashed: that is a failure of the file
+            error = "check crashed: %s" % e
+        status = "ok" if not error else "FAILED: %s" % error
+        print("launch check %s: %s" % (path, status))
+        body = "" if not error else '<failure message=%s>%s</failure>' % (quoteattr("launch check failed"), escape(error))
+        with open(os.path.join(out_dir, name + ".xml"), "w") as f:
+            f.write('<?xml version="1.0" encoding="UTF-8"?>\n'
+                    '<testsuite name="launch_check" tests="1" failures="%d" errors="0">\n'
+                    '  <testcase classname="launch_check" name=%s>%s</testcase>\n</testsuite>\n'
+                    % (1 if error else 0, quoteattr(path), body))
+        failed += 1 if error else 0
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
