@@ -48,8 +48,10 @@ cat logs/catkin_lint.log
 junit catkin_lint $lint_ok logs/catkin_lint.log
 
 # roslaunch's check on every launch file of the workspace (XML, args, packages and node executables).
+set +u  # ROS's setup scripts read unset variables
 # shellcheck disable=SC1091
 source devel/setup.bash
+set -u
 launch_files=$(ls launch/*.launch src/*/launch/*.launch 2>/dev/null || true)
 if [[ -n "$launch_files" ]]; then
   # shellcheck disable=SC2086
