@@ -9,7 +9,7 @@ mkdir -p logs
 jobs="${SCANSTOP_JOBS:-$(nproc)}"
 echo "build: catkin_make (Release, -j$jobs), log in logs/build.log"
 start=$(date +%s)
-if ! catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON \
+if ! catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON -DCATKIN_WHITELIST_PACKAGES="" \
     ${SCANSTOP_CMAKE_ARGS:-} -j"$jobs" > logs/build.log 2>&1; then
   grep -E "error|Error" logs/build.log | head -40 >&2 || true
   echo "build: FAILED (see logs/build.log)" >&2

@@ -1,0 +1,88 @@
+#pragma once
+/// The scan-stop cycle (thesis chapters 1, 5.5, 8): scan -> register -> plan -> drive the path
+/// (rotate, then straight segments of at most d_max; scan and register at intermediate landmarks)
+/// -> repeat until the explorer reports exploration complete, the scan budget is reached or the user
+/// aborts. ROS-free: the steps go through a RobotSystem; the state is saved after every step.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <string>
+
+#include "scanstop_mission/mission_state.h"
+#include "scanstop_mission/robot_system.h"
+
+namespace scanstop {
+namespace mission {
+
+/// Mission parameters (the node maps its ROS parameters onto these fields in one place).
+struct MissionConfig {
+  int planes = 400;                      ///< planes per 3D scan: 50, 100, 200 or 400
+  int max_scans = 0;                     ///< scan budget; 0 = until exploration is complete
+  double d_max_m = 2.0;                  ///< longest straight motion [m] (thesis d_max)
+  double waypoint_tolerance_m = 0.05;    ///< a waypoint closer than this is reached [m]
+  double heading_tolerance_rad = 0.005;  ///< rotations smaller than this are skipped [rad]
+  int max_step_retries = 2;              ///< retries of a failed scan, registration or plan
+  int max_consecutive_failed_cycles = 5; ///< cycles in a row that make no progress before giving up
+  int max_cycles = 1000;                 ///< hard bound on plan-drive cycles
+  bool build_mesh = true;                ///< ask the mesher for a mesh at the end (if one runs)
+  std::string run_dir;                   ///< where the state, the log and the report go
+  std::string world;                     ///< world name for the report (simulation)
+
+  /// Throws ConfigError naming the first bad field.
+  void validate() const;
+};
+
+/// Runs one mission. run() blocks; pause(), resume() and abort() may be called from other threads.
+class Mission {
+ public:
+  using Log = std::function<void(const std::string&)>;
+
+  /// `info` and `warn` receive progress lines (the node forwards them to rosout).
+  Mission(MissionConfig config, RobotSystem& robot, Log info, Log warn);
+
+  /// Loads <run_dir>/mission_state.yaml if it exists and reconciles it with the SLAM map
+  /// (scans registered after the last save are adopted). Returns true when a mission was resumed.
+  /// Throws IoError when the saved state is corrupt.
+  bool loadSavedState();
+
+  /// Runs the cycle to its end; returns the final state (Done, Aborted or Failed).
+  State run();
+
+  void pause();
+  void resume();
+  void abort();
+
+  /// A copy of the current state (thread-safe).
+  MissionState snapshot() const;
+  std::string statePath() const { return config_.run_dir + "/mission_state.yaml"; }
+  std::string logPath() const { return config_.run_dir + "/mission.log"; }
+
+ private:
+  enum class Control { Run, Pause, Abort };
+
+  bool scanAndRegister();
+  bool driveTo(const Eigen::Vector2d& waypoint, bool& collision);
+  bool checkControl();  ///< waits while paused; false when aborted
+  void setState(State s);
+  void event(const std::string& what, bool warning = false);
+  void save();
+  double elapsed() const;
+  bool budgetReached() const;
+
+  MissionConfig config_;
+  RobotSystem& robot_;
+  Log info_, warn_;
+  mutable std::mutex mutex_;
+  std::condition_variable control_cv_;
+  Control control_ = Control::Run;
+  MissionState state_;
+  double elapsed_at_start_ = 0.0;
+  std::chrono::steady_clock::time_point started_;
+  double pending_plan_wall_s_ = 0.0;
+};
+
+}  // namespace mission
+}  // namespace scanstop

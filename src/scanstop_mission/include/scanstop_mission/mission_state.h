@@ -1,0 +1,70 @@
+#pragma once
+/// The mission's persistent state: everything needed to resume a mission after any node dies and to
+/// write its report. Saved atomically to <run_dir>/mission_state.yaml after every step.
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scanstop_common/pose.h"
+
+namespace scanstop {
+namespace mission {
+
+/// Mission states as published on mission/status.
+enum class State { Idle, Scanning, Registering, Planning, Driving, Paused, Meshing, Done, Aborted, Failed };
+const char* toString(State s);
+State stateFromString(const std::string& s);  ///< throws std::invalid_argument
+
+/// One scan of the mission.
+struct ScanRecord {
+  int index = 0;                         ///< SLAM's scan index
+  Pose2D map_pose;                       ///< corrected pose (map)
+  Pose2D odom_pose;                      ///< odometry pose at scan time (odom = map at the start)
+  std::optional<Pose2D> true_pose;       ///< ground truth in the map frame (simulation)
+  bool converged = true;
+  double rms_m = 0.0;
+  uint32_t valid_points = 0;
+  double scan_time_s = 0.0;              ///< modelled scan duration [s]
+  double register_wall_s = 0.0;          ///< registration compute time [s]
+  double plan_wall_s = 0.0;              ///< planning compute time of the cycle that led here [s]
+  double coverage = 0.0;                 ///< coverage reported by the plan after this scan
+};
+
+/// One event worth keeping (collisions, failures, replans).
+struct EventRecord {
+  double elapsed_s = 0.0;
+  std::string what;
+};
+
+struct MissionState {
+  State state = State::Idle;
+  std::vector<ScanRecord> scans;
+  std::vector<Eigen::Vector2d> unreachable;  ///< targets the robot failed to reach (map frame)
+  std::vector<EventRecord> events;
+  int collisions = 0;
+  int plans = 0;
+  double coverage = 0.0;
+  bool complete = false;
+  std::string complete_reason;
+  std::string last_error;
+  double elapsed_s = 0.0;                    ///< wall time spent in the mission so far [s]
+  double modelled_time_s = 0.0;              ///< sum of the steps' modelled durations [s]
+  std::string world;                         ///< world name (simulation) for the report
+  // The pose estimate: map pose = last_map_pose * odom_at_last_scan^-1 * odom_now.
+  Pose2D last_map_pose;                      ///< corrected pose of the last registered scan (map)
+  Pose2D odom_at_last_scan;                  ///< odometry pose of the last registered scan
+  Pose2D odom_now;                           ///< odometry pose after the last step
+
+  /// The current pose estimate in the map frame.
+  Pose2D estimate() const { return last_map_pose * odom_at_last_scan.inverse() * odom_now; }
+
+  /// Writes the state as YAML, atomically (temporary file, fsync, rename). Throws IoError.
+  void save(const std::string& path) const;
+  /// Reads a saved state; throws IoError naming the file and the problem when it is corrupt.
+  static MissionState load(const std::string& path);
+};
+
+}  // namespace mission
+}  // namespace scanstop

@@ -1,0 +1,142 @@
+#include "scanstop_mission/mission_state.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <stdexcept>
+
+#include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+
+namespace scanstop {
+namespace mission {
+namespace {
+
+const char* const kStateNames[] = {"IDLE",    "SCANNING", "REGISTERING", "PLANNING", "DRIVING",
+                                   "PAUSED",  "MESHING",  "DONE",        "ABORTED",  "FAILED"};
+
+YAML::Node poseNode(const Pose2D& p) {
+  YAML::Node n(YAML::NodeType::Sequence);
+  n.SetStyle(YAML::EmitterStyle::Flow);
+  n.push_back(p.x);
+  n.push_back(p.y);
+  n.push_back(p.yaw);
+  return n;
+}
+
+Pose2D poseOf(const YAML::Node& n) {
+  if (!n.IsSequence() || n.size() != 3) throw std::runtime_error("a pose must be [x, y, yaw]");
+  return Pose2D(n[0].as<double>(), n[1].as<double>(), n[2].as<double>());
+}
+
+}  // namespace
+
+const char* toString(State s) { return kStateNames[static_cast<int>(s)]; }
+
+State stateFromString(const std::string& s) {
+  for (int i = 0; i < 10; ++i)
+    if (s == kStateNames[i]) return static_cast<State>(i);
+  throw std::invalid_argument("unknown mission state '" + s + "'");
+}
+
+void MissionState::save(const std::string& path) const {
+  YAML::Node root;
+  root["state"] = toString(state);
+  root["world"] = world;
+  root["collisions"] = collisions;
+  root["plans"] = plans;
+  root["coverage"] = coverage;
+  root["complete"] = complete;
+  root["complete_reason"] = complete_reason;
+  root["last_error"] = last_error;
+  root["elapsed_s"] = elapsed_s;
+  root["modelled_time_s"] = modelled_time_s;
+  root["last_map_pose"] = poseNode(last_map_pose);
+  root["odom_at_last_scan"] = poseNode(odom_at_last_scan);
+  root["odom_now"] = poseNode(odom_now);
+  YAML::Node scan_list(YAML::NodeType::Sequence);
+  for (const ScanRecord& s : scans) {
+    YAML::Node n;
+    n["index"] = s.index;
+    n["map_pose"] = poseNode(s.map_pose);
+    n["odom_pose"] = poseNode(s.odom_pose);
+    if (s.true_pose) n["true_pose"] = poseNode(*s.true_pose);
+    n["converged"] = s.converged;
+    n["rms_m"] = s.rms_m;
+    n["valid_points"] = s.valid_points;
+    n["scan_time_s"] = s.scan_time_s;
+    n["register_wall_s"] = s.register_wall_s;
+    n["plan_wall_s"] = s.plan_wall_s;
+    n["coverage"] = s.coverage;
+    scan_list.push_back(n);
+  }
+  root["scans"] = scan_list;
+  YAML::Node unreachable_list(YAML::NodeType::Sequence);
+  for (const auto& u : unreachable) {
+    YAML::Node n(YAML::NodeType::Sequence);
+    n.SetStyle(YAML::EmitterStyle::Flow);
+    n.push_back(u.x());
+    n.push_back(u.y());
+    unreachable_list.push_back(n);
+  }
+  root["unreachable"] = unreachable_list;
+  YAML::Node event_list(YAML::NodeType::Sequence);
+  for (const auto& e : events) {
+    YAML::Node n;
+    n["elapsed_s"] = e.elapsed_s;
+    n["what"] = e.what;
+    event_list.push_back(n);
+  }
+  root["events"] = event_list;
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << root;
+  writeFileAtomic(path, std::string(out.c_str()) + "\n");
+}
+
+MissionState MissionState::load(const std::string& path) {
+  const std::string text = readFile(path);
+  MissionState m;
+  try {
+    const YAML::Node root = YAML::Load(text);
+    if (!root.IsMap()) throw std::runtime_error("not a mission state (expected a YAML map)");
+    m.state = stateFromString(root["state"].as<std::string>());
+    m.world = root["world"].as<std::string>("");
+    m.collisions = root["collisions"].as<int>(0);
+    m.plans = root["plans"].as<int>(0);
+    m.coverage = root["coverage"].as<double>(0.0);
+    m.complete = root["complete"].as<bool>(false);
+    m.complete_reason = root["complete_reason"].as<std::string>("");
+    m.last_error = root["last_error"].as<std::string>("");
+    m.elapsed_s = root["elapsed_s"].as<double>(0.0);
+    m.modelled_time_s = root["modelled_time_s"].as<double>(0.0);
+    m.last_map_pose = poseOf(root["last_map_pose"]);
+    m.odom_at_last_scan = poseOf(root["odom_at_last_scan"]);
+    m.odom_now = poseOf(root["odom_now"]);
+    for (const YAML::Node& n : root["scans"]) {
+      ScanRecord s;
+      s.index = n["index"].as<int>();
+      s.map_pose = poseOf(n["map_pose"]);
+      s.odom_pose = poseOf(n["odom_pose"]);
+      if (n["true_pose"]) s.true_pose = poseOf(n["true_pose"]);
+      s.converged = n["converged"].as<bool>(true);
+      s.rms_m = n["rms_m"].as<double>(0.0);
+      s.valid_points = n["valid_points"].as<uint32_t>(0);
+      s.scan_time_s = n["scan_time_s"].as<double>(0.0);
+      s.register_wall_s = n["register_wall_s"].as<double>(0.0);
+      s.plan_wall_s = n["plan_wall_s"].as<double>(0.0);
+      s.coverage = n["coverage"].as<double>(0.0);
+      if (!m.scans.empty() && s.index <= m.scans.back().index)
+        throw std::runtime_error("scan indices must increase (" + std::to_string(s.index) + " after " +
+                                 std::to_string(m.scans.back().index) + ")");
+      m.scans.push_back(s);
+    }
+    for (const YAML::Node& n : root["unreachable"]) m.unreachable.emplace_back(n[0].as<double>(), n[1].as<double>());
+    for (const YAML::Node& n : root["events"]) m.events.push_back({n["elapsed_s"].as<double>(), n["what"].as<std::string>()});
+  } catch (const std::exception& e) {
+    throw IoError(path, std::string("corrupt mission state: ") + e.what());
+  }
+  return m;
+}
+
+}  // namespace mission
+}  // namespace scanstop

@@ -1,0 +1,404 @@
+// Unit tests of the scan-stop cycle against an in-memory robot system: a robot in a 10 x 8 m room with
+// a wall segment, odometry with a systematic error, a "SLAM" that returns the true pose, and an
+// "explorer" that offers a fixed list of targets and honours the unreachable list.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <thread>
+
+#include "scanstop_common/error.h"
+#include "scanstop_mission/mission.h"
+
+namespace scanstop {
+namespace mission {
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    char pattern[] = "/tmp/scanstop_mission_test_XXXXXX";
+    path_ = mkdtemp(pattern);
+  }
+  ~TempDir() {
+    if (std::system(("rm -rf '" + path_ + "'").c_str()) != 0) std::perror("rm");
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+/// Segment-segment intersection parameter along p->q, or -1.
+double hitParameter(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& a,
+                    const Eigen::Vector2d& b) {
+  const Eigen::Vector2d r = q - p, s = b - a;
+  const double denom = r.x() * s.y() - r.y() * s.x();
+  if (std::abs(denom) < 1e-12) return -1.0;
+  const Eigen::Vector2d ap = a - p;
+  const double t = (ap.x() * s.y() - ap.y() * s.x()) / denom;
+  const double u = (ap.x() * r.y() - ap.y() * r.x()) / denom;
+  return (t >= 0.0 && t <= 1.0 && u >= 0.0 && u <= 1.0) ? t : -1.0;
+}
+
+class FakeSystem : public RobotSystem {
+ public:
+  // World
+  Pose2D truth;                                   // true pose (map frame = start pose)
+  Pose2D odom;                                    // odometry (drifts: 3 % long, 1 deg per metre)
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls;
+  // Explorer
+  std::vector<Eigen::Vector2d> targets;
+  std::vector<bool> visited;
+  int plan_failures_left = 0;
+  bool always_fail_plan = false;
+  bool insert_intermediate = false;               // add a mid-point landmark with scan_at = true
+  // SLAM
+  std::vector<Pose2D> slam_poses;
+  int lose_register_answers = 0;                  // store the scan but report failure this many times
+  // Observations
+  double max_forward = 0.0;
+  int scans_taken = 0;
+  std::function<void(int)> on_scan;               // called at every takeScan with the count so far
+  std::string state_path;                         // checked at every scan: saved state has all scans
+  int saved_scan_mismatches = 0;
+
+  ScanResult takeScan(int planes) override {
+    ScanResult r;
+    ++scans_taken;
+    if (on_scan) on_scan(scans_taken);
+    if (!state_path.empty() && !slam_poses.empty()) {
+      // Every registered scan must already be persisted before the next step starts.
+      const MissionState saved = MissionState::load(state_path);
+      if (saved.scans.size() != slam_poses.size()) ++saved_scan_mismatches;
+    }
+    r.success = true;
+    r.duration_s = planes * 0.1;
+    r.odom_pose = odom;
+    r.raw_points = planes * 682;
+    r.valid_points = r.raw_points * 2 / 3;
+    r.payload = truth;  // the "cloud": what SLAM needs to find the true pose
+    return r;
+  }
+
+  RegisterResult registerScan(const ScanResult& scan) override {
+    RegisterResult r;
+    slam_poses.push_back(std::any_cast<Pose2D>(scan.payload));
+    if (lose_register_answers > 0) {
+      --lose_register_answers;
+      r.success = false;
+      r.message = "service call timed out";
+      return r;
+    }
+    r.success = true;
+    r.converged = true;
+    r.map_pose = slam_poses.back();
+    r.scan_index = static_cast<uint32_t>(slam_poses.size() - 1);
+    r.iterations = 5;
+    return r;
+  }
+
+  MotionResult rotate(double angle_rad) override {
+    MotionResult r;
+    truth = truth * Pose2D(0, 0, angle_rad);
+    odom = odom * Pose2D(0, 0, angle_rad * 1.01);
+    r.success = true;
+    r.achieved = angle_rad * 1.01;
+    r.odom_pose = odom;
+    r.duration_s = std::abs(angle_rad);
+    return r;
+  }
+
+  MotionResult forward(double distance_m) override {
+    MotionResult r;
+    max_forward = std::max(max_forward, distance_m);
+    double d = distance_m;
+    const Eigen::Vector2d p(truth.x, truth.y);
+    const Eigen::Vector2d q = truth.transformPoint(Eigen::Vector2d(distance_m, 0));
+    for (const auto& w : walls) {
+      const double t = hitParameter(p, q, w.first, w.second);
+      if (t >= 0.0) {
+        d = std::min(d, std::max(0.0, t * distance_m - 0.25));
+        r.collision = true;
+      }
+    }
+    truth = truth * Pose2D(d, 0, 0);
+    odom = odom * Pose2D(d * 1.03, 0, d * M_PI / 180.0);
+    r.success = !r.collision;
+    r.message = r.collision ? "bumped into a wall" : "";
+    r.achieved = d * 1.03;
+    r.odom_pose = odom;
+    r.duration_s = d / 0.2;
+    return r;
+  }
+
+  PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable) override {
+    PlanResult r;
+    if (always_fail_plan || plan_failures_left > 0) {
+      --plan_failures_left;
+      r.message = "no floor seen yet";
+      return r;
+    }
+    visited.resize(targets.size(), false);
+    const Eigen::Vector2d here(map_pose.x, map_pose.y);
+    for (size_t i = 0; i < targets.size(); ++i) {
+      if ((targets[i] - here).norm() < 0.15) visited[i] = true;
+      for (const auto& u : unreachable)
+        if ((targets[i] - u).norm() < 1e-6) visited[i] = true;
+    }
+    r.success = true;
+    size_t done = 0;
+    for (bool v : visited) done += v ? 1 : 0;
+    r.coverage = targets.empty() ? 1.0 : static_cast<double>(done) / targets.size();
+    for (size_t i = 0; i < targets.size(); ++i) {
+      if (visited[i]) continue;
+      r.target = targets[i];
+      if (insert_intermediate) {
+        r.waypoints.push_back(0.5 * (here + targets[i]));
+        r.scan_at.push_back(true);
+      }
+      r.waypoints.push_back(targets[i]);
+      r.scan_at.push_back(true);
+      r.score = 1.0;
+      return r;
+    }
+    r.complete = true;
+    r.complete_reason = "no reachable cell borders unknown space";
+    return r;
+  }
+
+  MeshResult buildMesh(const std::string& path) override {
+    MeshResult r;
+    r.available = true;
+    r.success = true;
+    r.triangles = 42;
+    r.file = path;
+    return r;
+  }
+
+  std::optional<Pose2D> groundTruth() override { return truth; }
+  int registeredScanCount() override { return static_cast<int>(slam_poses.size()); }
+  std::optional<Pose2D> registeredScanPose(int i) override {
+    if (i < 0 || i >= static_cast<int>(slam_poses.size())) return std::nullopt;
+    return slam_poses[i];
+  }
+};
+
+MissionConfig config(const std::string& dir) {
+  MissionConfig c;
+  c.run_dir = dir;
+  c.planes = 50;
+  c.world = "fake_room";
+  return c;
+}
+
+void quiet(const std::string&) {}
+
+TEST(Mission, ExploresEveryTargetAndEndsComplete) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{2.0, 0.0}, {3.0, 3.0}, {0.5, 4.0}};
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  EXPECT_TRUE(s.complete);
+  EXPECT_EQ(s.scans.size(), 4u);  // start + one per target
+  EXPECT_EQ(s.collisions, 0);
+  // The robot really stood at each target when it scanned there (odometry drift corrected by SLAM).
+  for (size_t i = 1; i < s.scans.size(); ++i) {
+    const Eigen::Vector2d at(s.scans[i].true_pose->x, s.scans[i].true_pose->y);
+    EXPECT_LT((at - sys.targets[i - 1]).norm(), 0.1) << "scan " << i;
+  }
+  // State and log are on disk and load back identically.
+  const MissionState saved = MissionState::load(m.statePath());
+  EXPECT_EQ(saved.state, State::Done);
+  EXPECT_EQ(saved.scans.size(), 4u);
+  EXPECT_EQ(saved.complete_reason, "no reachable cell borders unknown space");
+  EXPECT_TRUE(std::ifstream(m.logPath()).good());
+}
+
+TEST(Mission, StraightMotionsNeverExceedDMax) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{7.0, 0.0}};
+  MissionConfig c = config(dir.path());
+  c.d_max_m = 2.0;
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  EXPECT_LE(sys.max_forward, 2.0 + 1e-9);
+  EXPECT_GT(sys.max_forward, 1.5);
+}
+
+TEST(Mission, ScansAtIntermediateLandmarks) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.insert_intermediate = true;
+  sys.targets = {{3.0, 0.0}};
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  EXPECT_EQ(m.snapshot().scans.size(), 3u);  // start, landmark, target
+}
+
+TEST(Mission, CollisionMarksTargetUnreachableAndReplans) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.walls = {{{1.5, -1.0}, {1.5, 1.0}}};  // a wall across the way to the first target
+  sys.targets = {{3.0, 0.0}, {0.0, 2.0}};
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  EXPECT_EQ(s.collisions, 1);
+  ASSERT_EQ(s.unreachable.size(), 1u);
+  EXPECT_TRUE(s.unreachable[0].isApprox(Eigen::Vector2d(3.0, 0.0)));
+  EXPECT_TRUE(s.complete);
+  EXPECT_LT(sys.truth.x, 1.5);  // never passed through the wall
+}
+
+TEST(Mission, ScanBudgetEndsTheMission) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {2, 0}, {3, 0}, {4, 0}};
+  MissionConfig c = config(dir.path());
+  c.max_scans = 2;
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  EXPECT_EQ(s.scans.size(), 2u);
+  EXPECT_FALSE(s.complete);
+  EXPECT_NE(s.complete_reason.find("budget"), std::string::npos);
+}
+
+TEST(Mission, StateIsSavedAfterEveryScan) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {1, 1}, {0, 1}};
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  sys.state_path = m.statePath();
+  EXPECT_EQ(m.run(), State::Done);
+  EXPECT_EQ(sys.saved_scan_mismatches, 0);
+}
+
+TEST(Mission, ResumesAfterTheMissionNodeDiesWithoutLosingOrRepeatingAScan) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {2, 1}, {1, 2}, {0, 2}};
+  {
+    Mission first(config(dir.path()), sys, quiet, quiet);
+    sys.on_scan = [&first](int n) {
+      if (n == 3) first.abort();  // the node is killed during the third scan
+    };
+    EXPECT_EQ(first.run(), State::Aborted);
+  }
+  sys.on_scan = nullptr;
+  const size_t registered_before = sys.slam_poses.size();
+  EXPECT_GE(registered_before, 2u);
+  Mission second(config(dir.path()), sys, quiet, quiet);
+  EXPECT_TRUE(second.loadSavedState());
+  EXPECT_EQ(second.snapshot().scans.size(), registered_before);
+  EXPECT_EQ(second.run(), State::Done);
+  const MissionState s = second.snapshot();
+  EXPECT_TRUE(s.complete);
+  // Every scan SLAM holds is in the mission exactly once, in order.
+  ASSERT_EQ(s.scans.size(), sys.slam_poses.size());
+  for (size_t i = 0; i < s.scans.size(); ++i) EXPECT_EQ(s.scans[i].index, static_cast<int>(i));
+}
+
+TEST(Mission, AdoptsAScanSlamStoredWhenItsAnswerWasLost) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}};
+  sys.lose_register_answers = 1;
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  EXPECT_EQ(sys.slam_poses.size(), 2u);  // registered once each, never twice
+  EXPECT_EQ(m.snapshot().scans.size(), 2u);
+}
+
+TEST(Mission, ResumeAdoptsScansRegisteredAfterTheLastSave) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {2, 0}};
+  {
+    MissionConfig c = config(dir.path());
+    c.max_scans = 1;
+    Mission m(c, sys, quiet, quiet);
+    EXPECT_EQ(m.run(), State::Done);
+  }
+  sys.slam_poses.push_back(Pose2D(0.9, 0.0, 0.0));  // SLAM stored one more before the mission died
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  ASSERT_TRUE(m.loadSavedState());
+  ASSERT_EQ(m.snapshot().scans.size(), 2u);
+  EXPECT_DOUBLE_EQ(m.snapshot().scans[1].map_pose.x, 0.9);
+}
+
+TEST(Mission, PauseHoldsAndResumeContinues) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {1, 1}};
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  std::atomic<bool> paused_seen{false};
+  sys.on_scan = [&m](int n) {
+    if (n == 2) m.pause();
+  };
+  std::thread runner([&m] { EXPECT_EQ(m.run(), State::Done); });
+  for (int i = 0; i < 500 && !paused_seen; ++i) {
+    paused_seen = m.snapshot().state == State::Paused;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_TRUE(paused_seen);
+  const int scans_while_paused = sys.scans_taken;
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(sys.scans_taken, scans_while_paused);
+  m.resume();
+  runner.join();
+  EXPECT_TRUE(m.snapshot().complete);
+}
+
+TEST(Mission, PlanningFailuresAreRetriedThenTheMissionFailsWithTheReason) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}};
+  sys.plan_failures_left = 2;  // two failures are absorbed by the retries
+  Mission ok(config(dir.path() + "/ok"), sys, quiet, quiet);
+  EXPECT_EQ(ok.run(), State::Done);
+
+  FakeSystem broken;
+  broken.always_fail_plan = true;
+  Mission m(config(dir.path() + "/broken"), broken, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Failed);
+  EXPECT_NE(m.snapshot().last_error.find("no floor seen yet"), std::string::npos) << m.snapshot().last_error;
+}
+
+TEST(Mission, BadConfigurationNamesTheParameter) {
+  MissionConfig c;
+  c.run_dir = "/tmp";
+  c.planes = 123;
+  try {
+    c.validate();
+    FAIL() << "planes = 123 must be refused";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("planes"), std::string::npos);
+  }
+  c.planes = 50;
+  c.run_dir.clear();
+  EXPECT_THROW(c.validate(), ConfigError);
+}
+
+TEST(MissionState, CorruptFileIsReportedByName) {
+  TempDir dir;
+  const std::string path = dir.path() + "/mission_state.yaml";
+  std::ofstream(path) << "state: FLYING\n";
+  try {
+    MissionState::load(path);
+    FAIL() << "a corrupt state must not load";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("FLYING"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace mission
+}  // namespace scanstop
