@@ -1,0 +1,46 @@
+#pragma once
+/// The run report: summary.json for scripts, PNG plots and a one-page report.md for people.
+
+#include <string>
+#include <vector>
+
+#include "scanstop_mission/mission_state.h"
+
+namespace scanstop {
+namespace mission {
+
+/// Figures of a finished (or stopped) mission.
+struct Summary {
+  std::string world;
+  std::string state;
+  int scans = 0;
+  double coverage = 0.0;               ///< observed share of the reachable floor [0..1]
+  int collisions = 0;
+  bool complete = false;
+  std::string complete_reason;
+  bool has_ground_truth = false;
+  double slam_error_m = 0.0;           ///< final SLAM position error against ground truth [m]
+  double slam_error_yaw_deg = 0.0;
+  double odom_error_m = 0.0;           ///< final odometry-only position error against ground truth [m]
+  double odom_error_yaw_deg = 0.0;
+  double compute_per_cycle_mean_s = 0.0;  ///< register + plan wall time per cycle [s]
+  double compute_per_cycle_max_s = 0.0;
+  double scan_time_mean_s = 0.0;       ///< modelled scan duration [s]
+  double elapsed_s = 0.0;              ///< wall time of the mission [s]
+  double modelled_time_s = 0.0;        ///< time the steps would take on the robot [s]
+  int unconverged_registrations = 0;
+};
+
+/// Computes the summary of a mission state.
+Summary summarize(const MissionState& state);
+
+/// The summary as one JSON object.
+std::string toJson(const Summary& s);
+
+/// Writes summary.json, coverage.png, trajectory.png and report.md into run_dir (atomically).
+/// `images` lists further images (relative to run_dir, e.g. the explorer's per-step figures) that the
+/// report links. Returns the path of report.md. Throws IoError.
+std::string writeReport(const MissionState& state, const std::string& run_dir, const std::vector<std::string>& images);
+
+}  // namespace mission
+}  // namespace scanstop

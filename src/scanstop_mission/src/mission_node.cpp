@@ -1,0 +1,174 @@
+#include "scanstop_mission/mission_node.h"
+
+#include <dirent.h>
+#include <scanstop_msgs/MissionStatus.h>
+
+#include <algorithm>
+#include <iomanip>
+#include <sstream>
+
+#include "scanstop_common/error.h"
+#include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/params.h"
+#include "scanstop_mission/report.h"
+
+namespace scanstop {
+namespace mission {
+namespace {
+
+/// PNG files below run_dir/<sub> (sorted), relative to run_dir: the explorer's per-step figures.
+std::vector<std::string> listImages(const std::string& run_dir, const std::string& sub) {
+  std::vector<std::string> out;
+  if (DIR* d = opendir((run_dir + "/" + sub).c_str())) {
+    while (const dirent* e = readdir(d)) {
+      const std::string name = e->d_name;
+      if (name.size() > 4 && name.compare(name.size() - 4, 4, ".png") == 0) out.push_back(sub + "/" + name);
+    }
+    closedir(d);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
+  config_.run_dir = ros_params::require<std::string>(pnh, "run_dir");
+  ros_params::optional(pnh, "planes", config_.planes);
+  ros_params::optional(pnh, "max_scans", config_.max_scans);
+  ros_params::optional(pnh, "d_max", config_.d_max_m);
+  ros_params::optional(pnh, "waypoint_tolerance", config_.waypoint_tolerance_m);
+  ros_params::optional(pnh, "heading_tolerance", config_.heading_tolerance_rad);
+  ros_params::optional(pnh, "max_step_retries", config_.max_step_retries);
+  ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
+  ros_params::optional(pnh, "build_mesh", config_.build_mesh);
+  ros_params::optional(pnh, "world", config_.world);
+  std::string map_dir = config_.run_dir + "/map";
+  ros_params::optional(pnh, "map_dir", map_dir);
+  CallTimeouts timeouts;
+  ros_params::optional(pnh, "wait_for_service_timeout", timeouts.wait_for_service_s);
+  ros_params::optional(pnh, "scan_timeout", timeouts.scan_s);
+  ros_params::optional(pnh, "motion_timeout", timeouts.motion_s);
+  ros_params::optional(pnh, "register_timeout", timeouts.register_s);
+  ros_params::optional(pnh, "plan_timeout", timeouts.plan_s);
+  ros_params::optional(pnh, "mesh_timeout", timeouts.mesh_s);
+  for (const auto& [name, value] : {std::pair<const char*, double>{"wait_for_service_timeout", timeouts.wait_for_service_s},
+                                    {"scan_timeout", timeouts.scan_s},
+                                    {"motion_timeout", timeouts.motion_s},
+                                    {"register_timeout", timeouts.register_s},
+                                    {"plan_timeout", timeouts.plan_s},
+                                    {"mesh_timeout", timeouts.mesh_s}}) {
+    if (!(value > 0.0 && value < 1e6))
+      throw ConfigError(std::string("parameter '") + pnh.resolveName(name) + "' = " + std::to_string(value) +
+                        " must be in (0, 1e6) s");
+  }
+  bool autostart = true;
+  ros_params::optional(pnh, "autostart", autostart);
+  ros_params::optional(pnh, "shutdown_when_done", shutdown_when_done_);
+  config_.validate();
+
+  robot_ = std::make_unique<RosRobotSystem>(nh_, timeouts, map_dir);
+  mission_ = std::make_unique<Mission>(
+      config_, *robot_, [](const std::string& s) { ROS_INFO_STREAM("mission: " << s); },
+      [](const std::string& s) { ROS_WARN_STREAM("mission: " << s); });
+  if (mission_->loadSavedState())
+    ROS_INFO("mission: resuming the mission saved in %s (%zu scans so far)", mission_->statePath().c_str(),
+             mission_->snapshot().scans.size());
+
+  status_pub_ = nh_.advertise<scanstop_msgs::MissionStatus>("mission/status", 10, true);
+  start_srv_ = nh_.advertiseService("mission/start", &MissionNode::onStart, this);
+  pause_srv_ = nh_.advertiseService("mission/pause", &MissionNode::onPause, this);
+  resume_srv_ = nh_.advertiseService("mission/resume", &MissionNode::onResume, this);
+  abort_srv_ = nh_.advertiseService("mission/abort", &MissionNode::onAbort, this);
+  status_timer_ = nh_.createTimer(ros::Duration(1.0), &MissionNode::publishStatus, this);
+  if (autostart) {
+    running_ = true;
+    runner_ = std::thread(&MissionNode::runMission, this);
+  } else {
+    ROS_INFO("mission: ready; call mission/start to begin");
+  }
+}
+
+MissionNode::~MissionNode() {
+  if (mission_) mission_->abort();
+  if (runner_.joinable()) runner_.join();
+}
+
+void MissionNode::runMission() {
+  const State end = mission_->run();
+  const MissionState state = mission_->snapshot();
+  try {
+    const std::string report = writeReport(state, config_.run_dir, listImages(config_.run_dir, "explorer"));
+    const Summary s = summarize(state);
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1) << "mission " << toString(end) << ": " << s.scans << " scans, coverage "
+        << s.coverage * 100.0 << " %, " << s.collisions << " collisions, " << s.elapsed_s << " s";
+    if (s.has_ground_truth)
+      out << std::setprecision(1) << ", final pose error " << s.slam_error_m * 100.0 << " cm (odometry alone "
+          << s.odom_error_m * 100.0 << " cm)";
+    ROS_INFO_STREAM(out.str());
+    ROS_INFO("mission: map in %s/map, report in %s, summary in %s/summary.json", config_.run_dir.c_str(), report.c_str(),
+             config_.run_dir.c_str());
+  } catch (const std::exception& e) {
+    ROS_ERROR("mission: could not write the report: %s", e.what());
+  }
+  ros::TimerEvent none;
+  publishStatus(none);
+  running_ = false;
+  if (shutdown_when_done_) {
+    ros::Duration(0.5).sleep();  // let the last status go out
+    ros::shutdown();
+  }
+}
+
+bool MissionNode::onStart(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  if (running_) {
+    res.success = false;
+    res.message = "the mission is already running";
+    return true;
+  }
+  if (runner_.joinable()) runner_.join();
+  running_ = true;
+  runner_ = std::thread(&MissionNode::runMission, this);
+  res.success = true;
+  res.message = "mission started";
+  return true;
+}
+
+bool MissionNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  res.success = running_;
+  res.message = running_ ? "pausing after the current step" : "no mission is running";
+  if (running_) mission_->pause();
+  return true;
+}
+
+bool MissionNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  res.success = running_;
+  res.message = running_ ? "resumed" : "no mission is running";
+  if (running_) mission_->resume();
+  return true;
+}
+
+bool MissionNode::onAbort(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  res.success = running_;
+  res.message = running_ ? "aborting after the current step; the state and map are kept" : "no mission is running";
+  if (running_) mission_->abort();
+  return true;
+}
+
+void MissionNode::publishStatus(const ros::TimerEvent&) {
+  const MissionState s = mission_->snapshot();
+  scanstop_msgs::MissionStatus msg;
+  msg.header.stamp = ros::Time::now();
+  msg.header.frame_id = "map";
+  msg.state = toString(s.state);
+  msg.scan_count = static_cast<uint32_t>(s.scans.size());
+  msg.coverage = s.coverage;
+  msg.elapsed_s = s.elapsed_s;
+  msg.last_error = s.last_error;
+  msg.map_pose = ros_conv::toPoseStamped(s.estimate(), "map", msg.header.stamp);
+  status_pub_.publish(msg);
+}
+
+}  // namespace mission
+}  // namespace scanstop

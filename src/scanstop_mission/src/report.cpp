@@ -1,0 +1,237 @@
+#include "scanstop_mission/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+
+namespace scanstop {
+namespace mission {
+namespace {
+
+std::string num(double v, int precision = 4) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream out;
+  out << std::setprecision(precision) << std::fixed << v;
+  return out.str();
+}
+
+std::string quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+double yawErrorDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAngle(a.yaw - b.yaw)) * 180.0 / M_PI; }
+
+void writePng(const std::string& path, const cv::Mat& image) {
+  std::vector<uchar> buffer;
+  if (!cv::imencode(".png", image, buffer)) throw IoError(path, "PNG encoding failed");
+  writeFileAtomic(path, std::string(buffer.begin(), buffer.end()));
+}
+
+/// A simple chart canvas mapping data coordinates to pixels with a margin for labels.
+struct Canvas {
+  cv::Mat img;
+  double x0, x1, y0, y1;
+  int margin = 60;
+  Canvas(int w, int h, double xa, double xb, double ya, double yb, bool equal_aspect)
+      : img(h, w, CV_8UC3, cv::Scalar(255, 255, 255)), x0(xa), x1(xb), y0(ya), y1(yb) {
+    if (x1 - x0 < 1e-9) x1 = x0 + 1.0;
+    if (y1 - y0 < 1e-9) y1 = y0 + 1.0;
+    if (equal_aspect) {
+      const double sx = (w - 2.0 * margin) / (x1 - x0), sy = (h - 2.0 * margin) / (y1 - y0);
+      const double s = std::min(sx, sy);
+      const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+      const double hw = 0.5 * (w - 2.0 * margin) / s, hh = 0.5 * (h - 2.0 * margin) / s;
+      x0 = cx - hw;
+      x1 = cx + hw;
+      y0 = cy - hh;
+      y1 = cy + hh;
+    }
+  }
+  cv::Point px(double x, double y) const {
+    return cv::Point(static_cast<int>(margin + (x - x0) / (x1 - x0) * (img.cols - 2 * margin)),
+                     static_cast<int>(img.rows - margin - (y - y0) / (y1 - y0) * (img.rows - 2 * margin)));
+  }
+  void text(const std::string& s, cv::Point p, double scale = 0.5, cv::Scalar color = cv::Scalar(0, 0, 0)) {
+    cv::putText(img, s, p, cv::FONT_HERSHEY_SIMPLEX, scale, color, 1, cv::LINE_AA);
+  }
+  void axes(const std::string& xlabel, const std::string& ylabel, const std::string& title) {
+    cv::rectangle(img, px(x0, y0), px(x1, y1), cv::Scalar(0, 0, 0), 1);
+    for (int i = 0; i <= 4; ++i) {
+      const double xv = x0 + (x1 - x0) * i / 4.0, yv = y0 + (y1 - y0) * i / 4.0;
+      text(num(xv, 1), px(xv, y0) + cv::Point(-12, 20), 0.4);
+      text(num(yv, 2), px(x0, yv) + cv::Point(-55, 4), 0.4);
+    }
+    text(xlabel, cv::Point(img.cols / 2 - 40, img.rows - 12));
+    text(ylabel, cv::Point(5, margin - 20));
+    text(title, cv::Point(margin, 25), 0.6);
+  }
+};
+
+}  // namespace
+
+Summary summarize(const MissionState& st) {
+  Summary s;
+  s.world = st.world;
+  s.state = toString(st.state);
+  s.scans = static_cast<int>(st.scans.size());
+  s.coverage = st.coverage;
+  s.collisions = st.collisions;
+  s.complete = st.complete;
+  s.complete_reason = st.complete_reason;
+  s.elapsed_s = st.elapsed_s;
+  s.modelled_time_s = st.modelled_time_s;
+  double compute_sum = 0.0, scan_sum = 0.0;
+  for (const ScanRecord& r : st.scans) {
+    const double c = r.register_wall_s + r.plan_wall_s;
+    compute_sum += c;
+    s.compute_per_cycle_max_s = std::max(s.compute_per_cycle_max_s, c);
+    scan_sum += r.scan_time_s;
+    if (!r.converged) ++s.unconverged_registrations;
+  }
+  if (!st.scans.empty()) {
+    s.compute_per_cycle_mean_s = compute_sum / st.scans.size();
+    s.scan_time_mean_s = scan_sum / st.scans.size();
+    const ScanRecord& last = st.scans.back();
+    if (last.true_pose) {
+      s.has_ground_truth = true;
+      s.slam_error_m = std::hypot(last.map_pose.x - last.true_pose->x, last.map_pose.y - last.true_pose->y);
+      s.slam_error_yaw_deg = yawErrorDeg(last.map_pose, *last.true_pose);
+      // The odometry frame starts at the start pose, as the map frame does.
+      s.odom_error_m = std::hypot(last.odom_pose.x - last.true_pose->x, last.odom_pose.y - last.true_pose->y);
+      s.odom_error_yaw_deg = yawErrorDeg(last.odom_pose, *last.true_pose);
+    }
+  }
+  return s;
+}
+
+std::string toJson(const Summary& s) {
+  std::ostringstream out;
+  out << "{\n"
+      << "  \"world\": " << quote(s.world) << ",\n"
+      << "  \"state\": " << quote(s.state) << ",\n"
+      << "  \"scans\": " << s.scans << ",\n"
+      << "  \"coverage\": " << num(s.coverage) << ",\n"
+      << "  \"collisions\": " << s.collisions << ",\n"
+      << "  \"complete\": " << (s.complete ? "true" : "false") << ",\n"
+      << "  \"complete_reason\": " << quote(s.complete_reason) << ",\n"
+      << "  \"ground_truth\": " << (s.has_ground_truth ? "true" : "false") << ",\n"
+      << "  \"final_slam_error_m\": " << (s.has_ground_truth ? num(s.slam_error_m) : "null") << ",\n"
+      << "  \"final_slam_error_yaw_deg\": " << (s.has_ground_truth ? num(s.slam_error_yaw_deg) : "null") << ",\n"
+      << "  \"final_odometry_error_m\": " << (s.has_ground_truth ? num(s.odom_error_m) : "null") << ",\n"
+      << "  \"final_odometry_error_yaw_deg\": " << (s.has_ground_truth ? num(s.odom_error_yaw_deg) : "null") << ",\n"
+      << "  \"unconverged_registrations\": " << s.unconverged_registrations << ",\n"
+      << "  \"compute_per_cycle_mean_s\": " << num(s.compute_per_cycle_mean_s) << ",\n"
+      << "  \"compute_per_cycle_max_s\": " << num(s.compute_per_cycle_max_s) << ",\n"
+      << "  \"scan_time_mean_s\": " << num(s.scan_time_mean_s) << ",\n"
+      << "  \"modelled_time_s\": " << num(s.modelled_time_s, 1) << ",\n"
+      << "  \"elapsed_s\": " << num(s.elapsed_s, 1) << "\n"
+      << "}\n";
+  return out.str();
+}
+
+std::string writeReport(const MissionState& st, const std::string& run_dir, const std::vector<std::string>& images) {
+  const Summary s = summarize(st);
+  writeFileAtomic(run_dir + "/summary.json", toJson(s));
+
+  // Coverage against scan count.
+  {
+    Canvas c(640, 400, 0.0, std::max<double>(1.0, st.scans.size()), 0.0, 1.0, false);
+    c.axes("scans", "coverage", "Observed share of the reachable floor");
+    cv::Point prev = c.px(0, 0);
+    for (size_t i = 0; i < st.scans.size(); ++i) {
+      const cv::Point p = c.px(i + 1.0, st.scans[i].coverage);
+      cv::line(c.img, prev, p, cv::Scalar(200, 80, 0), 2, cv::LINE_AA);
+      cv::circle(c.img, p, 3, cv::Scalar(200, 80, 0), cv::FILLED);
+      prev = p;
+    }
+    writePng(run_dir + "/coverage.png", c.img);
+  }
+
+  // Trajectories: SLAM, odometry and (simulation) ground truth, at the scan poses.
+  {
+    double xa = 1e9, xb = -1e9, ya = 1e9, yb = -1e9;
+    const auto grow = [&](const Pose2D& p) {
+      xa = std::min(xa, p.x);
+      xb = std::max(xb, p.x);
+      ya = std::min(ya, p.y);
+      yb = std::max(yb, p.y);
+    };
+    for (const ScanRecord& r : st.scans) {
+      grow(r.map_pose);
+      grow(r.odom_pose);
+      if (r.true_pose) grow(*r.true_pose);
+    }
+    if (st.scans.empty()) xa = xb = ya = yb = 0.0;
+    Canvas c(800, 700, xa - 0.5, xb + 0.5, ya - 0.5, yb + 0.5, true);
+    c.axes("x [m]", "y [m]", "Scan poses: SLAM (blue), odometry (red), ground truth (green)");
+    const auto draw = [&](auto pose_of, cv::Scalar color) {
+      for (size_t i = 0; i < st.scans.size(); ++i) {
+        const std::optional<Pose2D> p = pose_of(st.scans[i]);
+        if (!p) continue;
+        const cv::Point q = c.px(p->x, p->y);
+        cv::circle(c.img, q, 4, color, cv::FILLED, cv::LINE_AA);
+        const cv::Point h = c.px(p->x + 0.25 * std::cos(p->yaw), p->y + 0.25 * std::sin(p->yaw));
+        cv::line(c.img, q, h, color, 1, cv::LINE_AA);
+        if (i > 0) {
+          const std::optional<Pose2D> o = pose_of(st.scans[i - 1]);
+          if (o) cv::line(c.img, c.px(o->x, o->y), q, color, 1, cv::LINE_AA);
+        }
+      }
+    };
+    draw([](const ScanRecord& r) { return std::optional<Pose2D>(r.odom_pose); }, cv::Scalar(40, 40, 220));
+    draw([](const ScanRecord& r) { return r.true_pose; }, cv::Scalar(40, 170, 40));
+    draw([](const ScanRecord& r) { return std::optional<Pose2D>(r.map_pose); }, cv::Scalar(200, 80, 0));
+    writePng(run_dir + "/trajectory.png", c.img);
+  }
+
+  std::ostringstream md;
+  md << "# Exploration report" << (s.world.empty() ? "" : ": " + s.world) << "\n\n"
+     << "| figure | value |\n|---|---|\n"
+     << "| final state | " << s.state << " |\n"
+     << "| exploration complete | " << (s.complete ? "yes" : "no") << " (" << s.complete_reason << ") |\n"
+     << "| scans | " << s.scans << " |\n"
+     << "| coverage of the reachable floor | " << num(s.coverage * 100.0, 1) << " % |\n"
+     << "| collisions | " << s.collisions << " |\n"
+     << "| registrations that did not converge | " << s.unconverged_registrations << " |\n";
+  if (s.has_ground_truth) {
+    md << "| final SLAM pose error | " << num(s.slam_error_m * 100.0, 1) << " cm, " << num(s.slam_error_yaw_deg, 2)
+       << " deg |\n"
+       << "| final odometry-only error | " << num(s.odom_error_m * 100.0, 1) << " cm, "
+       << num(s.odom_error_yaw_deg, 2) << " deg |\n";
+  }
+  md << "| compute per cycle (register + plan) | mean " << num(s.compute_per_cycle_mean_s, 2) << " s, max "
+     << num(s.compute_per_cycle_max_s, 2) << " s |\n"
+     << "| modelled scan time | " << num(s.scan_time_mean_s, 1) << " s per scan |\n"
+     << "| modelled mission time | " << num(s.modelled_time_s / 60.0, 1) << " min |\n"
+     << "| wall time | " << num(s.elapsed_s, 1) << " s |\n\n"
+     << "## Coverage\n\n![coverage](coverage.png)\n\n"
+     << "## Trajectory\n\n![trajectory](trajectory.png)\n\n";
+  if (!images.empty()) {
+    md << "## Explorer, step by step\n\n";
+    for (const std::string& image : images) md << "![" << image << "](" << image << ")\n\n";
+  }
+  md << "## Events\n\n";
+  for (const EventRecord& e : st.events) md << "- " << num(e.elapsed_s, 1) << " s: " << e.what << "\n";
+  md << "\nMachine-readable: `summary.json`. Map: `map/`. Mission state: `mission_state.yaml`.\n";
+  const std::string path = run_dir + "/report.md";
+  writeFileAtomic(path, md.str());
+  return path;
+}
+
+}  // namespace mission
+}  // namespace scanstop

@@ -1,0 +1,88 @@
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "scanstop_common/file_util.h"
+#include "scanstop_mission/report.h"
+
+namespace scanstop {
+namespace mission {
+namespace {
+
+MissionState twoScans() {
+  MissionState st;
+  st.world = "room_10x8";
+  st.state = State::Done;
+  st.complete = true;
+  st.complete_reason = "no frontier left";
+  st.coverage = 0.97;
+  st.collisions = 1;
+  ScanRecord a;
+  a.index = 0;
+  a.true_pose = Pose2D();
+  a.scan_time_s = 40.0;
+  a.register_wall_s = 0.5;
+  a.plan_wall_s = 0.0;
+  ScanRecord b;
+  b.index = 1;
+  b.map_pose = Pose2D(2.03, 0.0, 0.01);
+  b.odom_pose = Pose2D(2.30, 0.4, 0.1);
+  b.true_pose = Pose2D(2.0, 0.0, 0.0);
+  b.scan_time_s = 40.0;
+  b.register_wall_s = 0.7;
+  b.plan_wall_s = 0.3;
+  b.converged = false;
+  st.scans = {a, b};
+  return st;
+}
+
+TEST(Report, SummaryComputesErrorsAgainstGroundTruth) {
+  const Summary s = summarize(twoScans());
+  EXPECT_EQ(s.scans, 2);
+  EXPECT_TRUE(s.has_ground_truth);
+  EXPECT_NEAR(s.slam_error_m, 0.03, 1e-9);
+  EXPECT_NEAR(s.slam_error_yaw_deg, 0.01 * 180.0 / M_PI, 1e-9);
+  EXPECT_NEAR(s.odom_error_m, 0.5, 1e-9);  // (0.3, 0.4) off
+  EXPECT_NEAR(s.compute_per_cycle_mean_s, 0.75, 1e-9);
+  EXPECT_NEAR(s.compute_per_cycle_max_s, 1.0, 1e-9);
+  EXPECT_EQ(s.unconverged_registrations, 1);
+}
+
+TEST(Report, WritesSummaryPlotsAndIndex) {
+  char pattern[] = "/tmp/scanstop_report_test_XXXXXX";
+  const std::string dir = mkdtemp(pattern);
+  const std::string md = writeReport(twoScans(), dir, {"explorer/step_001_evaluation.png"});
+  const std::string json = readFile(dir + "/summary.json");
+  EXPECT_NE(json.find("\"world\": \"room_10x8\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"scans\": 2"), std::string::npos);
+  EXPECT_NE(json.find("\"final_slam_error_m\": 0.0300"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"final_odometry_error_m\": 0.5000"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"complete\": true"), std::string::npos);
+  for (const char* png : {"/coverage.png", "/trajectory.png"}) {
+    const cv::Mat img = cv::imread(dir + png);
+    ASSERT_FALSE(img.empty()) << png;
+    // Something was drawn besides the white background.
+    cv::Mat gray;
+    cv::cvtColor(img, gray, cv::COLOR_BGR2GRAY);
+    EXPECT_GT(cv::countNonZero(gray < 128), 100) << png;
+  }
+  const std::string text = readFile(md);
+  EXPECT_NE(text.find("| scans | 2 |"), std::string::npos) << text;
+  EXPECT_NE(text.find("step_001_evaluation.png"), std::string::npos);
+  EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
+}
+
+TEST(Report, RealRobotHasNoGroundTruthFigures) {
+  MissionState st = twoScans();
+  for (auto& s : st.scans) s.true_pose.reset();
+  const Summary s = summarize(st);
+  EXPECT_FALSE(s.has_ground_truth);
+  EXPECT_NE(toJson(s).find("\"final_slam_error_m\": null"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mission
+}  // namespace scanstop
