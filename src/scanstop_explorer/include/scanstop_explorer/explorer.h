@@ -1,0 +1,77 @@
+#pragma once
+/// The explorer's state across planning steps: the growing floor grid, the scan positions (for
+/// the knowledge map) and the blacklist of targets the robot failed to reach.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "scanstop_common/map_dir.h"
+#include "scanstop_common/pose.h"
+#include "scanstop_explorer/floor_map.h"
+#include "scanstop_explorer/planner.h"
+
+namespace scanstop {
+namespace explorer {
+
+/// All explorer parameters.
+struct ExplorerConfig {
+  FloorConfig floor;
+  PlannerConfig planner;
+  double known_free_radius_m = 0.3;   ///< floor disc marked free around each scan pose [m], [0, 5]
+  double target_tolerance_m = 0.3;    ///< robot this close to the last target: it was reached [m], (0, 10]
+  double progress_m = 0.2;            ///< the travel distance to an unreached target must shrink by this per plan [m], [0, 10]
+  int max_failed_attempts = 2;        ///< plans without progress before a target is blacklisted, [1, 100]
+  double blacklist_radius_m = 0.5;    ///< radius of the blacklisted disc around a failed target [m], (0, 10]
+
+  /// Validates every field (ConfigError naming parameter, value and range).
+  void validate() const;
+};
+
+class Explorer {
+ public:
+  explicit Explorer(const ExplorerConfig& config = ExplorerConfig());
+
+  /// Adds one registered scan: points in the map frame (z = 0 is the floor) [m], base_link pose
+  /// in the map frame. Each index is used once: returns false (and changes nothing) for an index
+  /// that was added before.
+  bool addScan(uint32_t index, const Pose2D& T_map_base, const std::vector<Eigen::Vector3f>& points_map);
+  /// Adds every scan of a map directory that is not in yet. Returns how many were added.
+  size_t loadMapDirectory(const MapDirectory& dir);
+
+  /// One planning step from the robot's map-frame pose; updates the blacklist (a target planned
+  /// before that the robot neither reached nor got closer to max_failed_attempts times).
+  PlanResult plan(const Pose2D& T_map_base);
+
+  /// Grows the floor grid to hold the map-frame box [lo, hi] [m] (plus the margin) before any scan
+  /// reaches it, e.g. a known building outline; cells stay unknown.
+  void reserveArea(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) { floor_.ensureContains(lo, hi); }
+
+  /// Excludes a disc from all future targets and from the termination test.
+  void blacklist(const Eigen::Vector2d& center_map, double radius_m);
+  const std::vector<std::pair<Eigen::Vector2d, double>>& blacklisted() const { return blacklist_; }
+
+  size_t scanCount() const { return scans_.size(); }
+  bool hasScan(uint32_t index) const { return scans_.count(index) > 0; }
+  std::vector<Eigen::Vector2d> scanPositions() const;
+  const FloorMap& floorMap() const { return floor_; }
+  const ExplorerConfig& config() const { return config_; }
+
+ private:
+  struct Attempt {
+    bool active = false;
+    Eigen::Vector2d target = Eigen::Vector2d::Zero();
+    double cost_m = 0.0;
+    int failures = 0;
+  };
+  ExplorerConfig config_;
+  FloorMap floor_;
+  std::map<uint32_t, Pose2D> scans_;
+  std::vector<std::pair<Eigen::Vector2d, double>> blacklist_;
+  Attempt last_;
+};
+
+}  // namespace explorer
+}  // namespace scanstop

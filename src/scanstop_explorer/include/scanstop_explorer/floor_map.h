@@ -1,0 +1,66 @@
+#pragma once
+/// Floor extraction (thesis 5.2): registered 3D scans -> a 2D grid of floor / obstacle / unknown
+/// cells whose bounds grow with the map.
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "scanstop_explorer/grid.h"
+
+namespace scanstop {
+namespace explorer {
+
+/// Cell states of the floor grid (CV_8U values).
+enum CellState : uint8_t {
+  kUnknown = 0,   ///< no floor and no obstacle point
+  kFloor = 1,     ///< floor points only (or known free: the robot stood there)
+  kObstacle = 2,  ///< at least min_obstacle_points points in the robot's height layer
+};
+
+/// Parameters of the floor extraction.
+struct FloorConfig {
+  double resolution_m = 0.05;     ///< grid cell edge [m], (0.005, 1]
+  double floor_layer_m = 0.06;    ///< d_floor: thickness of the floor layer centred on z = 0 [m], (0, 0.5]
+  double robot_height_m = 0.6;    ///< d_robot: thickness of the obstacle layer above the floor layer [m], (0, 5]
+  double margin_m = 1.0;          ///< unknown margin kept around the data when the grid grows [m], [0, 20]
+  int min_floor_points = 1;       ///< floor points a cell needs to count as floor, [1, 1000]
+  int min_obstacle_points = 1;    ///< obstacle points that make a cell an obstacle, [1, 1000]
+  double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
+
+  /// Throws ConfigError naming the parameter, its value and the allowed range.
+  void validate() const;
+};
+
+/// The incremental floor grid: add scans (map frame) and known-free discs; read the states.
+class FloorMap {
+ public:
+  explicit FloorMap(const FloorConfig& config = FloorConfig());
+
+  /// Adds the points of one scan in the map frame (z = 0 is the floor) [m]. Non-finite points
+  /// and points outside both layers are skipped; the grid grows to hold every used point plus
+  /// margin_m. Returns the number of points that marked floor or obstacle.
+  size_t addPoints(const std::vector<Eigen::Vector3f>& points_map);
+  /// Marks the disc of radius_m around a map point as known free floor (where the robot stood;
+  /// the scanner cannot see the floor under the robot). Obstacle cells stay obstacles.
+  void addKnownFree(const Eigen::Vector2d& center_map, double radius_m);
+
+  /// Cell states (CV_8U, CellState values) with geometry().
+  cv::Mat states() const;
+  const GridGeometry& geometry() const { return geometry_; }
+  const FloorConfig& config() const { return config_; }
+  bool empty() const { return geometry_.width == 0; }
+
+  /// Grows the grid (never shrinks) so that the map-frame box [lo, hi] plus margin fits.
+  void ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi);
+
+ private:
+  FloorConfig config_;
+  GridGeometry geometry_;
+  cv::Mat floor_hits_;     ///< CV_32S
+  cv::Mat obstacle_hits_;  ///< CV_32S
+  cv::Mat known_free_;     ///< CV_8U
+};
+
+}  // namespace explorer
+}  // namespace scanstop

@@ -1,0 +1,177 @@
+#pragma once
+/// One exploration step (thesis Algorithm 5): floor grid -> distance transform -> accessible floor
+/// -> skeleton and landmarks -> direct-reachability graph -> cost, knowledge and evaluation maps ->
+/// next scan point and path -> termination test. Every stage is its own function.
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "scanstop_common/pose.h"
+#include "scanstop_explorer/grid.h"
+
+namespace scanstop {
+namespace explorer {
+
+/// Parameters of a planning step. Defaults are the thesis' (5.4) where it gives them.
+struct PlannerConfig {
+  double robot_radius_m = 0.3;         ///< floor closer than this to a non-floor cell is not accessible [m], (0, 5]
+  double d_max_m = 2.0;                ///< longest straight movement [m], (0, 50]
+  double k_r_m = 1.0;                  ///< knowledge enhancement radius of a scan [m], (0, 50]
+  double k0 = 1.0;                     ///< knowledge offset in b, (0, 1e6]
+  double c0 = 3.0;                     ///< cost offset in b [m], (0, 1e6]
+  double knowledge_threshold = 1.0;    ///< a cell lacks knowledge when k < this, (0, 1e6]
+  double frontier_distance_m = 0.5;    ///< a cell borders unknown space when a frontier cell is this close [m], (0, 50]
+  double start_snap_m = 0.5;           ///< robot off the accessible floor: join it within this distance [m], [0, 5]
+  int max_coverage_landmarks = 2000;   ///< bound on the landmarks added for cells no landmark sees, [0, 1e6]
+
+  /// Throws ConfigError naming the parameter, its value and the allowed range.
+  void validate() const;
+};
+
+/// A node of the reachability graph (node 0 of a plan is the robot).
+struct Landmark {
+  enum Kind { kRobot, kAnchor, kSpecial, kExtra, kCoverage };
+  cv::Point cell;
+  Kind kind = kAnchor;
+  Eigen::Vector2d pos = Eigen::Vector2d::Zero();  ///< continuous cell coordinates (cell centre = cell + 0.5)
+
+  Landmark() = default;
+  Landmark(const cv::Point& c, Kind k) : cell(c), kind(k), pos(c.x + 0.5, c.y + 0.5) {}
+};
+const char* landmarkKindName(Landmark::Kind kind);
+
+// ---- stages ---------------------------------------------------------------------------------
+
+/// Floor-only cells (state == kFloor) as a CV_8U 0/1 mask.
+cv::Mat floorMask(const cv::Mat& states);
+/// Accessible floor: floor cells whose distance to the nearest non-floor cell is at least the
+/// robot radius (sq_dt >= radius_cells^2). CV_8U 0/1.
+cv::Mat accessibleFloor(const cv::Mat& sq_dt, double radius_cells);
+
+/// True when the straight segment between two points in continuous cell coordinates (cell (c, r)
+/// spans [c, c+1) x [r, r+1)) crosses only accessible cells (exact grid traversal; a segment
+/// through a cell corner needs both cells beside the corner).
+bool segmentClear(const cv::Mat& accessible, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+/// Segment between two cell centres.
+bool segmentClear(const cv::Mat& accessible, const cv::Point& a, const cv::Point& b);
+
+/// Landmarks (thesis 5.3): one anchor per 8-connected anchor component (its pixel with the
+/// largest distance), the special points of the skeleton, and extra skeleton points between two
+/// landmarks that the skeleton joins but that cannot see each other or are farther apart than
+/// d_max_cells (inserted recursively at the middle of the skeleton path).
+std::vector<Landmark> selectLandmarks(const cv::Mat& accessible, const cv::Mat& sq_dt, const cv::Mat& anchors,
+                                      const cv::Mat& skeleton, double d_max_cells);
+
+/// Direct-reachability graph: an edge joins two nodes whose segment is clear and at most d_max.
+struct Graph {
+  std::vector<std::vector<std::pair<int, double>>> adjacency;  ///< (node, length [cells])
+  size_t edgeCount() const;
+};
+Graph reachabilityGraph(const std::vector<Landmark>& nodes, const cv::Mat& accessible, double d_max_cells);
+/// Adds node `index` (already in `nodes`) to the graph.
+void addGraphNode(Graph& graph, const std::vector<Landmark>& nodes, int index, const cv::Mat& accessible,
+                  double d_max_cells);
+
+/// Dijkstra over the graph from the seeds (node, distance); dist/pred are updated in place (only
+/// improved). Returns the nodes whose distance improved.
+std::vector<int> dijkstra(const Graph& graph, const std::vector<std::pair<int, double>>& seeds,
+                          std::vector<double>& dist, std::vector<int>& pred);
+
+/// Cost map: travel distance [cells] of every accessible cell reachable by a path robot ->
+/// landmarks -> cell (each leg clear and <= d_max), and the node the last leg starts from.
+struct CostMap {
+  cv::Mat cost;             ///< CV_32F [cells], +inf where unreached
+  cv::Mat predecessor;      ///< CV_32S node index, -1 where unreached
+  std::vector<Landmark> nodes;
+  Graph graph;
+  std::vector<double> node_dist;  ///< [cells], +inf unreached
+  std::vector<int> node_pred;     ///< -1 for the robot / unreached
+  int coverage_landmarks = 0;     ///< landmarks added for cells that no other node sees (donut case)
+};
+/// Builds the graph (robot = node 0 at robot_cell), runs Dijkstra and fills the cost map. Cells of
+/// the robot's accessible component that no node sees get coverage landmarks: the cheapest
+/// reached cell next to them becomes a node, repeated until the component is covered (or
+/// max_coverage_landmarks), so a donut-shaped floor with no anchor seeing a cell still works.
+/// `robot_pos` is in continuous cell coordinates and must lie in an accessible cell.
+CostMap computeCostMap(const cv::Mat& accessible, const std::vector<Landmark>& landmarks, const Eigen::Vector2d& robot_pos,
+                       double d_max_cells, int max_coverage_landmarks);
+
+/// Knowledge map (thesis 5.4): each scan position adds 1 to every cell within k_r. CV_32F.
+cv::Mat knowledgeMap(const GridGeometry& geometry, const std::vector<Eigen::Vector2d>& scan_positions, double k_r_m);
+
+/// Evaluation b = 1/(k + k0) * 1/(c + c0) with c in metres, on reached cells not in `blacklist`
+/// (CV_8U, may be empty); 0 elsewhere. CV_32F.
+cv::Mat evaluationMap(const cv::Mat& knowledge, const cv::Mat& cost_cells, double resolution, double k0, double c0,
+                      const cv::Mat& blacklist);
+/// The cell with the largest b (first in raster order on ties); (-1, -1) if every b is 0.
+cv::Point argmaxCell(const cv::Mat& evaluation);
+
+/// Path back through the predecessors, in continuous cell coordinates: robot node, landmarks, target
+/// cell centre; with the node index of each waypoint (-1 for the target).
+std::vector<std::pair<Eigen::Vector2d, int>> extractPath(const CostMap& cost_map, const cv::Point& target);
+
+/// Frontier cells: unknown cells 4-adjacent to a floor cell. CV_8U 0/1.
+cv::Mat frontierCells(const cv::Mat& states);
+/// Open cells (termination): reached cells (finite cost), not blacklisted, with knowledge below
+/// knowledge_threshold, and a frontier cell within frontier_distance_cells. Exploration is
+/// complete when there is none. CV_8U 0/1.
+cv::Mat openCells(const cv::Mat& states, const cv::Mat& cost_cells, const cv::Mat& knowledge, const cv::Mat& blacklist,
+                  double knowledge_threshold, double frontier_distance_cells);
+
+// ---- the whole step -------------------------------------------------------------------------
+
+/// What a planning step needs.
+struct PlanInput {
+  cv::Mat states;                               ///< floor grid (CellState)
+  GridGeometry geometry;
+  std::vector<Eigen::Vector2d> scan_positions;  ///< map-frame positions of all past scans [m]
+  Pose2D robot;                                 ///< current robot pose (map frame)
+  std::vector<std::pair<Eigen::Vector2d, double>> blacklist;  ///< discs (centre [m], radius [m]) never chosen again
+};
+
+/// Everything a planning step computed (all grids share `geometry`).
+struct PlanResult {
+  bool success = false;
+  std::string message;
+  GridGeometry geometry;
+  Pose2D robot;
+  cv::Point robot_cell{-1, -1};  ///< node 0: robot cell, or the accessible cell it was joined to
+  bool robot_snapped = false;    ///< the robot was off the accessible floor and joined to robot_cell
+
+  cv::Mat states, sq_dt, accessible, anchors, skeleton_unpruned, skeleton, knowledge, blacklist, evaluation, open;
+  CostMap cost_map;
+
+  // the plan
+  std::vector<Eigen::Vector2d> path;  ///< map-frame waypoints [m], robot position first, target last
+  std::vector<bool> scan_at;          ///< per waypoint: scan there (intermediate landmarks and target)
+  cv::Point target_cell{-1, -1};
+  Eigen::Vector2d target = Eigen::Vector2d::Zero();
+  double score = 0.0;                 ///< b at the target
+  double target_cost_m = 0.0;         ///< travel distance to the target [m]
+
+  // termination and statistics
+  bool complete = false;
+  std::string complete_reason;
+  size_t open_cells = 0;
+  double coverage = 0.0;              ///< reached cells with knowledge >= threshold / reached cells
+  double floor_area_m2 = 0.0;
+  double accessible_area_m2 = 0.0;
+  double reachable_area_m2 = 0.0;
+  std::vector<std::pair<std::string, double>> timings_ms;  ///< per stage
+};
+
+/// Runs every stage up to the cost and knowledge maps (no target yet).
+PlanResult computeMaps(const PlanInput& input, const PlannerConfig& config);
+/// Evaluation, termination, target and path on the maps of `result` with the input's blacklist.
+void choosePlan(PlanResult& result, const PlanInput& input, const PlannerConfig& config);
+/// computeMaps + choosePlan.
+PlanResult planStep(const PlanInput& input, const PlannerConfig& config);
+
+/// Rasterises blacklist discs on a grid. CV_8U 0/1.
+cv::Mat rasterizeDiscs(const GridGeometry& geometry, const std::vector<std::pair<Eigen::Vector2d, double>>& discs);
+
+}  // namespace explorer
+}  // namespace scanstop

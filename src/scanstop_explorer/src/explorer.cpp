@@ -1,0 +1,98 @@
+#include "scanstop_explorer/explorer.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "scanstop_common/config.h"
+
+namespace scanstop {
+namespace explorer {
+
+void ExplorerConfig::validate() const {
+  floor.validate();
+  planner.validate();
+  requireInRange("known_free_radius_m", known_free_radius_m, 0.0, 5.0, "m");
+  requireInRange("target_tolerance_m", target_tolerance_m, 1e-6, 10.0, "m");
+  requireInRange("progress_m", progress_m, 0.0, 10.0, "m");
+  requireInRange("max_failed_attempts", max_failed_attempts, 1, 100);
+  requireInRange("blacklist_radius_m", blacklist_radius_m, 1e-6, 10.0, "m");
+}
+
+Explorer::Explorer(const ExplorerConfig& config) : config_(config), floor_(config.floor) { config_.validate(); }
+
+bool Explorer::addScan(uint32_t index, const Pose2D& T_map_base, const std::vector<Eigen::Vector3f>& points_map) {
+  if (scans_.count(index)) return false;
+  scans_[index] = T_map_base;
+  floor_.addPoints(points_map);
+  floor_.addKnownFree(Eigen::Vector2d(T_map_base.x, T_map_base.y), config_.known_free_radius_m);
+  return true;
+}
+
+size_t Explorer::loadMapDirectory(const MapDirectory& dir) {
+  size_t added = 0;
+  for (size_t i = 0; i < dir.size(); ++i) {
+    const MapScanInfo& info = dir.scans()[i];
+    if (hasScan(info.index)) continue;
+    const PointCloud cloud = dir.loadScanInMap(i);
+    added += addScan(info.index, info.map_pose, cloud.points) ? 1 : 0;
+  }
+  return added;
+}
+
+std::vector<Eigen::Vector2d> Explorer::scanPositions() const {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& s : scans_) out.emplace_back(s.second.x, s.second.y);
+  return out;
+}
+
+void Explorer::blacklist(const Eigen::Vector2d& center_map, double radius_m) {
+  blacklist_.emplace_back(center_map, radius_m);
+}
+
+PlanResult Explorer::plan(const Pose2D& T_map_base) {
+  const auto t0 = std::chrono::steady_clock::now();
+  PlanInput input;
+  input.states = floor_.states();
+  input.geometry = floor_.geometry();
+  input.scan_positions = scanPositions();
+  input.robot = T_map_base;
+  const double floor_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  PlanResult res = computeMaps(input, config_.planner);
+  res.timings_ms.insert(res.timings_ms.begin(), {"floor", floor_ms});
+  if (!res.success) return res;
+
+  // Did the robot reach, or at least get closer to, the target of the previous plan?
+  const Eigen::Vector2d robot(T_map_base.x, T_map_base.y);
+  std::string note;
+  if (last_.active) {
+    if ((robot - last_.target).norm() <= config_.target_tolerance_m) {
+      last_.active = false;
+    } else {
+      const cv::Point cell = res.geometry.cellOf(last_.target.x(), last_.target.y());
+      double cost_now = std::numeric_limits<double>::infinity();
+      if (res.geometry.contains(cell)) cost_now = res.cost_map.cost.at<float>(cell) * res.geometry.resolution;
+      if (!(cost_now < last_.cost_m - config_.progress_m)) ++last_.failures;
+      if (std::isfinite(cost_now)) last_.cost_m = cost_now;
+      if (last_.failures >= config_.max_failed_attempts) {
+        blacklist_.emplace_back(last_.target, config_.blacklist_radius_m);
+        note = "; blacklisted the unreachable target (" + std::to_string(last_.target.x()) + ", " +
+               std::to_string(last_.target.y()) + ") after " + std::to_string(last_.failures) + " plans without progress";
+        last_.active = false;
+      }
+    }
+  }
+  input.blacklist = blacklist_;
+  choosePlan(res, input, config_.planner);
+  res.message += note;
+  if (res.complete || res.target_cell.x < 0) {
+    last_.active = false;
+  } else if (last_.active && (res.target - last_.target).norm() <= config_.blacklist_radius_m) {
+    last_.target = res.target;  // the same target area again: keep counting
+  } else {
+    last_ = Attempt{true, res.target, res.target_cost_m, 0};
+  }
+  return res;
+}
+
+}  // namespace explorer
+}  // namespace scanstop

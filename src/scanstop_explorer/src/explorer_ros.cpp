@@ -1,0 +1,265 @@
+#include "scanstop_explorer/explorer_ros.h"
+
+#include <nav_msgs/Path.h>
+#include <sys/stat.h>
+#include <visualization_msgs/Marker.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/map_dir.h"
+#include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/params.h"
+#include "scanstop_explorer/render.h"
+
+namespace scanstop {
+namespace explorer {
+
+namespace {
+bool isDirectory(const std::string& p) {
+  struct stat st;
+  return ::stat(p.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+}  // namespace
+
+void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n) {
+  using ros_params::optional;
+  optional(pnh, "frame_id", n.frame_id);
+  optional(pnh, "map_dir", n.map_dir);
+  optional(pnh, "run_dir", n.run_dir);
+  optional(pnh, "image_scale", n.image_scale);
+  optional(pnh, "resolution", c.floor.resolution_m);
+  optional(pnh, "floor_layer", c.floor.floor_layer_m);
+  optional(pnh, "robot_height", c.floor.robot_height_m);
+  optional(pnh, "grid_margin", c.floor.margin_m);
+  optional(pnh, "min_floor_points", c.floor.min_floor_points);
+  optional(pnh, "min_obstacle_points", c.floor.min_obstacle_points);
+  optional(pnh, "robot_radius", c.planner.robot_radius_m);
+  optional(pnh, "d_max", c.planner.d_max_m);
+  optional(pnh, "k_r", c.planner.k_r_m);
+  optional(pnh, "k0", c.planner.k0);
+  optional(pnh, "c0", c.planner.c0);
+  optional(pnh, "knowledge_threshold", c.planner.knowledge_threshold);
+  optional(pnh, "frontier_distance", c.planner.frontier_distance_m);
+  optional(pnh, "start_snap", c.planner.start_snap_m);
+  optional(pnh, "max_coverage_landmarks", c.planner.max_coverage_landmarks);
+  optional(pnh, "known_free_radius", c.known_free_radius_m);
+  optional(pnh, "target_tolerance", c.target_tolerance_m);
+  optional(pnh, "progress", c.progress_m);
+  optional(pnh, "max_failed_attempts", c.max_failed_attempts);
+  optional(pnh, "blacklist_radius", c.blacklist_radius_m);
+  try {
+    c.validate();
+  } catch (const ConfigError& e) {
+    throw ConfigError(std::string("parameter in ") + pnh.getNamespace() + ": " + e.what());
+  }
+  requireInRange(pnh.resolveName("image_scale"), n.image_scale, 1, 16);
+  if (n.frame_id.empty()) throw ConfigError("parameter '" + pnh.resolveName("frame_id") + "' must not be empty");
+  if (!n.run_dir.empty() && !isDirectory(n.run_dir) && ::mkdir(n.run_dir.c_str(), 0755) != 0)
+    throw ConfigError("parameter '" + pnh.resolveName("run_dir") + "' = '" + n.run_dir + "': cannot create the directory");
+}
+
+ExplorerNode::ExplorerNode(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh) {
+  ExplorerConfig config;
+  readParameters(pnh, config, node_config_);
+  explorer_ = std::make_unique<Explorer>(config);
+  loadMapDir();
+  // Relative names, meant to be remapped.
+  floor_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/floor", 1, true);
+  accessible_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/accessible", 1, true);
+  distance_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/distance", 1, true);
+  cost_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/cost", 1, true);
+  knowledge_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/knowledge", 1, true);
+  evaluation_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/evaluation", 1, true);
+  skeleton_pub_ = nh_.advertise<visualization_msgs::Marker>("explorer/skeleton", 1, true);
+  landmarks_pub_ = nh_.advertise<visualization_msgs::Marker>("explorer/landmarks", 1, true);
+  path_pub_ = nh_.advertise<nav_msgs::Path>("explorer/path", 1, true);
+  scan_sub_ = nh_.subscribe("slam/registered_scan", 20, &ExplorerNode::onScan, this);
+  plan_srv_ = nh_.advertiseService("explorer/plan_next", &ExplorerNode::onPlanNext, this);
+  ROS_INFO("explorer_node: ready with %zu scans (map_dir '%s', run_dir '%s')", explorer_->scanCount(),
+           node_config_.map_dir.c_str(), node_config_.run_dir.c_str());
+}
+
+void ExplorerNode::loadMapDir() {
+  if (node_config_.map_dir.empty()) return;
+  if (!isDirectory(node_config_.map_dir)) {
+    ROS_WARN_ONCE("explorer_node: map_dir '%s' does not exist (yet); waiting for scans on the topic",
+                  node_config_.map_dir.c_str());
+    return;
+  }
+  try {
+    const size_t added = explorer_->loadMapDirectory(MapDirectory(node_config_.map_dir));
+    if (added) ROS_INFO("explorer_node: loaded %zu scans from %s", added, node_config_.map_dir.c_str());
+  } catch (const std::exception& e) {
+    ROS_ERROR("explorer_node: cannot load map_dir: %s", e.what());
+  }
+}
+
+void ExplorerNode::onScan(const scanstop_msgs::RegisteredScan& msg) {
+  if (explorer_->hasScan(msg.scan_index)) return;
+  const std::string& frame = msg.cloud.header.frame_id.empty() ? msg.header.frame_id : msg.cloud.header.frame_id;
+  if (frame != node_config_.frame_id) {
+    ROS_ERROR("explorer_node: scan %u is in frame '%s', expected '%s'; skipped", msg.scan_index, frame.c_str(),
+              node_config_.frame_id.c_str());
+    return;
+  }
+  try {
+    const PointCloud cloud = ros_conv::fromMsg(msg.cloud);
+    explorer_->addScan(msg.scan_index, ros_conv::fromPoseMsg(msg.pose.pose), cloud.points);
+  } catch (const std::exception& e) {
+    ROS_ERROR("explorer_node: scan %u rejected: %s", msg.scan_index, e.what());
+  }
+}
+
+bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_msgs::PlanNext::Response& res) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto finish = [&]() {
+    res.duration_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return true;
+  };
+  if (!req.map_pose.header.frame_id.empty() && req.map_pose.header.frame_id != node_config_.frame_id) {
+    res.success = false;
+    res.message = "map_pose is in frame '" + req.map_pose.header.frame_id + "', expected '" + node_config_.frame_id + "'";
+    res.complete_reason = res.message;
+    return finish();
+  }
+  Pose2D robot;
+  try {
+    robot = ros_conv::fromPoseMsg(req.map_pose.pose);
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = std::string("invalid map_pose: ") + e.what();
+    res.complete_reason = res.message;
+    return finish();
+  }
+  loadMapDir();  // scans published before this node started
+  const PlanResult r = explorer_->plan(robot);
+  const ros::Time now = ros::Time::now();
+  res.success = r.success;
+  res.message = r.message;
+  res.exploration_complete = r.complete;
+  res.complete_reason = r.success ? r.complete_reason : r.message;
+  res.coverage = r.coverage;
+  res.floor_area_m2 = r.floor_area_m2;
+  res.accessible_area_m2 = r.accessible_area_m2;
+  res.score = r.score;
+  res.target = ros_conv::toPoseStamped(Pose2D(r.target.x(), r.target.y(), robot.yaw), node_config_.frame_id, now);
+  res.path.header.frame_id = node_config_.frame_id;
+  res.path.header.stamp = now;
+  for (size_t i = 0; i < r.path.size(); ++i) {
+    // Heading along the next leg (the last waypoint keeps the previous leg's heading).
+    double yaw = robot.yaw;
+    if (r.path.size() > 1) {
+      const size_t a = i + 1 < r.path.size() ? i : i - 1;
+      const Eigen::Vector2d d = r.path[a + 1] - r.path[a];
+      if (d.norm() > 1e-9) yaw = std::atan2(d.y(), d.x());
+    }
+    res.path.poses.push_back(ros_conv::toPoseStamped(Pose2D(r.path[i].x(), r.path[i].y(), yaw), node_config_.frame_id, now));
+    res.scan_at.push_back(r.scan_at[i]);
+  }
+  if (r.success) {
+    publish(r);
+    path_pub_.publish(res.path);
+    writeImages(r);
+    ++step_;
+  }
+  ROS_INFO("explorer_node: plan %u: %s%s", step_, r.message.c_str(),
+           r.complete ? (" (" + r.complete_reason + ")").c_str() : "");
+  return finish();
+}
+
+nav_msgs::OccupancyGrid ExplorerNode::gridMsg(const PlanResult& r) const {
+  nav_msgs::OccupancyGrid g;
+  g.header.frame_id = node_config_.frame_id;
+  g.header.stamp = ros::Time::now();
+  g.info.map_load_time = g.header.stamp;
+  g.info.resolution = static_cast<float>(r.geometry.resolution);
+  g.info.width = static_cast<uint32_t>(r.geometry.width);
+  g.info.height = static_cast<uint32_t>(r.geometry.height);
+  g.info.origin.position.x = r.geometry.origin_x;
+  g.info.origin.position.y = r.geometry.origin_y;
+  g.info.origin.orientation.w = 1.0;
+  return g;
+}
+
+void ExplorerNode::publish(const PlanResult& r) {
+  auto send = [&](ros::Publisher& pub, std::vector<int8_t> data) {
+    nav_msgs::OccupancyGrid g = gridMsg(r);
+    g.data = std::move(data);
+    pub.publish(g);
+  };
+  send(floor_pub_, statesToOccupancy(r.states));
+  send(accessible_pub_, accessibleToOccupancy(r.states, r.accessible));
+  cv::Mat d;
+  r.sq_dt.convertTo(d, CV_32F);
+  cv::sqrt(d, d);
+  send(distance_pub_, scaledToOccupancy(d, r.accessible));
+  send(cost_pub_, scaledToOccupancy(r.cost_map.cost, r.cost_map.predecessor >= 0));
+  send(knowledge_pub_, scaledToOccupancy(r.knowledge, r.states != kUnknown));
+  send(evaluation_pub_, scaledToOccupancy(r.evaluation, r.evaluation > 0));
+
+  visualization_msgs::Marker sk;
+  sk.header.frame_id = node_config_.frame_id;
+  sk.header.stamp = ros::Time::now();
+  sk.ns = "skeleton";
+  sk.type = visualization_msgs::Marker::CUBE_LIST;
+  sk.action = visualization_msgs::Marker::ADD;
+  sk.pose.orientation.w = 1.0;
+  sk.scale.x = sk.scale.y = r.geometry.resolution;
+  sk.scale.z = 0.01;
+  sk.color.b = 1.0f;
+  sk.color.g = 0.5f;
+  sk.color.a = 1.0f;
+  for (int row = 0; row < r.skeleton.rows; ++row)
+    for (int col = 0; col < r.skeleton.cols; ++col)
+      if (r.skeleton.at<uint8_t>(row, col)) {
+        geometry_msgs::Point p;
+        const Eigen::Vector2d c = r.geometry.center({col, row});
+        p.x = c.x();
+        p.y = c.y();
+        p.z = 0.01;
+        sk.points.push_back(p);
+      }
+  skeleton_pub_.publish(sk);
+
+  visualization_msgs::Marker lm = sk;
+  lm.ns = "landmarks";
+  lm.type = visualization_msgs::Marker::SPHERE_LIST;
+  lm.scale.x = lm.scale.y = lm.scale.z = 0.12;
+  lm.points.clear();
+  for (size_t i = 1; i < r.cost_map.nodes.size(); ++i) {
+    const Landmark& l = r.cost_map.nodes[i];
+    geometry_msgs::Point p;
+    p.x = r.geometry.origin_x + l.pos.x() * r.geometry.resolution;
+    p.y = r.geometry.origin_y + l.pos.y() * r.geometry.resolution;
+    p.z = 0.06;
+    lm.points.push_back(p);
+    std_msgs::ColorRGBA c;
+    c.a = 1.0f;
+    c.r = 1.0f;
+    c.g = l.kind == Landmark::kAnchor ? 0.0f : (l.kind == Landmark::kSpecial ? 0.5f : 1.0f);
+    c.b = l.kind == Landmark::kCoverage ? 1.0f : 0.0f;
+    lm.colors.push_back(c);
+  }
+  landmarks_pub_.publish(lm);
+}
+
+void ExplorerNode::writeImages(const PlanResult& r) {
+  if (node_config_.run_dir.empty()) return;
+  char prefix[32];
+  std::snprintf(prefix, sizeof(prefix), "step_%03u_", step_);
+  try {
+    writePlanImages(r, node_config_.run_dir, prefix, node_config_.image_scale);
+    writeFileAtomic(node_config_.run_dir + "/" + prefix + "plan.json", planToJson(r) + "\n");
+    writeFileAtomic(node_config_.run_dir + "/" + prefix + "path.csv", pathToCsv(r));
+  } catch (const std::exception& e) {
+    ROS_ERROR("explorer_node: cannot write the step images: %s", e.what());
+  }
+}
+
+}  // namespace explorer
+}  // namespace scanstop

@@ -1,0 +1,123 @@
+#include "scanstop_explorer/floor_map.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "scanstop_common/config.h"
+
+namespace scanstop {
+namespace explorer {
+
+cv::Point GridGeometry::cellOf(double x_m, double y_m) const {
+  return {static_cast<int>(std::floor((x_m - origin_x) / resolution)),
+          static_cast<int>(std::floor((y_m - origin_y) / resolution))};
+}
+
+void FloorConfig::validate() const {
+  requireInRange("resolution_m", resolution_m, 0.005, 1.0, "m");
+  requireInRange("floor_layer_m", floor_layer_m, 1e-6, 0.5, "m");
+  requireInRange("robot_height_m", robot_height_m, 1e-6, 5.0, "m");
+  requireInRange("margin_m", margin_m, 0.0, 20.0, "m");
+  requireInRange("min_floor_points", min_floor_points, 1, 1000);
+  requireInRange("min_obstacle_points", min_obstacle_points, 1, 1000);
+  requireInRange("max_extent_m", max_extent_m, 1e-3, 1e4, "m");
+}
+
+FloorMap::FloorMap(const FloorConfig& config) : config_(config) {
+  config_.validate();
+  geometry_.resolution = config_.resolution_m;
+}
+
+void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+  const double res = config_.resolution_m;
+  if (!empty()) {
+    const double x1 = geometry_.origin_x + geometry_.width * res, y1 = geometry_.origin_y + geometry_.height * res;
+    if (lo.x() >= geometry_.origin_x && lo.y() >= geometry_.origin_y && hi.x() < x1 && hi.y() < y1) return;
+  }
+  // New bounds on the global lattice (multiples of the resolution), so cells never shift.
+  Eigen::Vector2d new_lo = lo.array() - config_.margin_m;
+  Eigen::Vector2d new_hi = hi.array() + config_.margin_m;
+  if (!empty()) {
+    new_lo = new_lo.cwiseMin(Eigen::Vector2d(geometry_.origin_x, geometry_.origin_y));
+    new_hi = new_hi.cwiseMax(Eigen::Vector2d(geometry_.origin_x + geometry_.width * res,
+                                             geometry_.origin_y + geometry_.height * res));
+  }
+  const long ix0 = static_cast<long>(std::floor(new_lo.x() / res)), iy0 = static_cast<long>(std::floor(new_lo.y() / res));
+  const long ix1 = static_cast<long>(std::ceil(new_hi.x() / res)) + 1, iy1 = static_cast<long>(std::ceil(new_hi.y() / res)) + 1;
+  GridGeometry g;
+  g.resolution = res;
+  g.origin_x = ix0 * res;
+  g.origin_y = iy0 * res;
+  g.width = static_cast<int>(ix1 - ix0);
+  g.height = static_cast<int>(iy1 - iy0);
+  cv::Mat floor = cv::Mat::zeros(g.height, g.width, CV_32S), obstacle = cv::Mat::zeros(g.height, g.width, CV_32S);
+  cv::Mat free = cv::Mat::zeros(g.height, g.width, CV_8U);
+  if (!empty()) {
+    const int dx = static_cast<int>(std::lround((geometry_.origin_x - g.origin_x) / res));
+    const int dy = static_cast<int>(std::lround((geometry_.origin_y - g.origin_y) / res));
+    const cv::Rect roi(dx, dy, geometry_.width, geometry_.height);
+    floor_hits_.copyTo(floor(roi));
+    obstacle_hits_.copyTo(obstacle(roi));
+    known_free_.copyTo(free(roi));
+  }
+  geometry_ = g;
+  floor_hits_ = floor;
+  obstacle_hits_ = obstacle;
+  known_free_ = free;
+}
+
+size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
+  const double half = 0.5 * config_.floor_layer_m;
+  const double top = half + config_.robot_height_m;
+  // First pass: bounds of the used points, so the grid grows once per scan.
+  Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
+  std::vector<uint8_t> kind(points_map.size(), 0);  // 0 skip, 1 floor, 2 obstacle
+  size_t used = 0;
+  for (size_t i = 0; i < points_map.size(); ++i) {
+    const Eigen::Vector3f& p = points_map[i];
+    if (!p.allFinite() || std::abs(p.x()) > config_.max_extent_m || std::abs(p.y()) > config_.max_extent_m) continue;
+    if (std::abs(p.z()) <= half) kind[i] = 1;
+    else if (p.z() > half && p.z() <= top) kind[i] = 2;
+    else continue;
+    lo = lo.cwiseMin(p.head<2>().cast<double>());
+    hi = hi.cwiseMax(p.head<2>().cast<double>());
+    ++used;
+  }
+  if (used == 0) return 0;
+  ensureContains(lo, hi);
+  for (size_t i = 0; i < points_map.size(); ++i) {
+    if (kind[i] == 0) continue;
+    const cv::Point c = geometry_.cellOf(points_map[i].x(), points_map[i].y());
+    if (!geometry_.contains(c)) continue;  // cannot happen after ensureContains
+    (kind[i] == 1 ? floor_hits_ : obstacle_hits_).at<int>(c)++;
+  }
+  return used;
+}
+
+void FloorMap::addKnownFree(const Eigen::Vector2d& center_map, double radius_m) {
+  if (!center_map.allFinite() || !(radius_m > 0.0)) return;
+  ensureContains(center_map.array() - radius_m, center_map.array() + radius_m);
+  const cv::Point c0 = geometry_.cellOf(center_map.x() - radius_m, center_map.y() - radius_m);
+  const cv::Point c1 = geometry_.cellOf(center_map.x() + radius_m, center_map.y() + radius_m);
+  for (int r = std::max(0, c0.y); r <= std::min(geometry_.height - 1, c1.y); ++r)
+    for (int c = std::max(0, c0.x); c <= std::min(geometry_.width - 1, c1.x); ++c)
+      if ((geometry_.center({c, r}) - center_map).norm() <= radius_m) known_free_.at<uint8_t>(r, c) = 1;
+}
+
+cv::Mat FloorMap::states() const {
+  cv::Mat s = cv::Mat::zeros(geometry_.height, geometry_.width, CV_8U);
+  for (int r = 0; r < geometry_.height; ++r) {
+    const int* f = floor_hits_.ptr<int>(r);
+    const int* o = obstacle_hits_.ptr<int>(r);
+    const uint8_t* k = known_free_.ptr<uint8_t>(r);
+    uint8_t* out = s.ptr<uint8_t>(r);
+    for (int c = 0; c < geometry_.width; ++c) {
+      if (o[c] >= config_.min_obstacle_points) out[c] = kObstacle;
+      else if (f[c] >= config_.min_floor_points || k[c]) out[c] = kFloor;
+    }
+  }
+  return s;
+}
+
+}  // namespace explorer
+}  // namespace scanstop

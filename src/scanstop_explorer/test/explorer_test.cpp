@@ -1,0 +1,223 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "scenes.h"
+#include "scanstop_common/error.h"
+#include "scanstop_common/map_dir.h"
+#include "scanstop_explorer/explorer.h"
+#include "scanstop_explorer/render.h"
+
+using namespace scanstop::explorer;
+using scanstop::Pose2D;
+
+namespace {
+std::string tempDir() {
+  char tmpl[] = "/tmp/explorer_test_XXXXXX";
+  const char* d = mkdtemp(tmpl);
+  if (!d) throw std::runtime_error("mkdtemp failed");
+  return d;
+}
+}  // namespace
+
+TEST(FloorMap, LayersMarkFloorObstaclesAndUnknown) {
+  FloorMap fm;
+  std::vector<Eigen::Vector3f> pts;
+  // 4 x 3 m room floor on a 2 cm lattice with +-1 cm height noise, walls up to 2.5 m.
+  for (double x = 0.01; x < 4.0; x += 0.02)
+    for (double y = 0.01; y < 3.0; y += 0.02) pts.emplace_back(x, y, (std::fmod(x * 37 + y * 91, 1.0) - 0.5) * 0.02);
+  for (double z = 0.0; z < 2.5; z += 0.05)
+    for (double t = 0.0; t < 4.0; t += 0.02) pts.emplace_back(t, -0.02, z), pts.emplace_back(t, 3.02, z);
+  // Thin-legged table: legs (2 cm) up to 0.75 m, a top at 0.75 m above the robot's height layer.
+  for (double z = 0.0; z < 0.75; z += 0.02) pts.emplace_back(2.0, 1.0, z);
+  for (double x = 1.9; x < 3.0; x += 0.02)
+    for (double y = 0.9; y < 1.8; y += 0.02) pts.emplace_back(x, y, 0.75);
+  pts.emplace_back(std::nanf(""), 0.0f, 0.0f);
+  EXPECT_GT(fm.addPoints(pts), 0u);
+  const cv::Mat s = fm.states();
+  const GridGeometry& g = fm.geometry();
+  EXPECT_EQ(s.at<uint8_t>(g.cellOf(1.0, 1.5)), kFloor);
+  EXPECT_EQ(s.at<uint8_t>(g.cellOf(2.0, 1.0)), kObstacle);  // table leg
+  EXPECT_EQ(s.at<uint8_t>(g.cellOf(2.5, 1.4)), kFloor);     // under the table top
+  EXPECT_EQ(s.at<uint8_t>(g.cellOf(1.0, -0.02)), kObstacle);  // wall
+  EXPECT_EQ(s.at<uint8_t>(g.cellOf(-0.5, 1.5)), kUnknown);    // margin outside the data
+  EXPECT_LE(g.origin_x, -0.9);  // 1 m margin
+}
+
+TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
+  FloorMap fm;
+  fm.addPoints({{0.51f, 0.51f, 0.0f}, {1.01f, 0.51f, 0.3f}});
+  const GridGeometry g0 = fm.geometry();
+  fm.addPoints({{10.02f, -7.98f, 0.0f}});
+  const GridGeometry g1 = fm.geometry();
+  EXPECT_GT(g1.width, g0.width);
+  EXPECT_GT(g1.height, g0.height);
+  EXPECT_LE(g1.origin_y, -8.0);
+  const cv::Mat s = fm.states();
+  EXPECT_EQ(s.at<uint8_t>(g1.cellOf(0.51, 0.51)), kFloor);
+  EXPECT_EQ(s.at<uint8_t>(g1.cellOf(1.01, 0.51)), kObstacle);
+  EXPECT_EQ(s.at<uint8_t>(g1.cellOf(10.02, -7.98)), kFloor);
+  EXPECT_EQ(cv::countNonZero(s), 3);
+  // The lattice is global: the cell of a point has the same centre before and after growing.
+  EXPECT_NEAR((g0.center(g0.cellOf(0.51, 0.51)) - g1.center(g1.cellOf(0.51, 0.51))).norm(), 0.0, 1e-9);
+}
+
+TEST(FloorMap, ValidatesConfig) {
+  FloorConfig c;
+  c.resolution_m = 0.0;
+  EXPECT_THROW(FloorMap{c}, scanstop::ConfigError);
+}
+
+TEST(Explorer, EachScanOnceAndKnownFreeUnderTheRobot) {
+  const test::Scene s = test::tableRoom();
+  Explorer ex;
+  const auto pts = test::simulateScan(s, {1.0, 1.0}, 4.0);
+  EXPECT_TRUE(ex.addScan(0, Pose2D(1.0, 1.0, 0.0), pts));
+  EXPECT_FALSE(ex.addScan(0, Pose2D(3.0, 1.0, 0.0), pts));
+  EXPECT_EQ(ex.scanCount(), 1u);
+  EXPECT_EQ(ex.scanPositions().front(), Eigen::Vector2d(1.0, 1.0));
+  const PlanResult r = ex.plan(Pose2D(1.0, 1.0, 0.0));
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_FALSE(r.complete);
+  EXPECT_TRUE(test::polylineOnAccessible(r.geometry, r.accessible, r.path));
+  EXPECT_EQ(r.timings_ms.front().first, "floor");
+}
+
+TEST(Explorer, ExploresTheTableRoomFromSimulatedScansAndTerminates) {
+  const test::Scene s = test::tableRoom();
+  Explorer ex;
+  Eigen::Vector2d robot(0.8, 0.8);
+  uint32_t index = 0;
+  ex.addScan(index++, Pose2D(robot.x(), robot.y(), 0.0), test::simulateScan(s, robot, 3.0));
+  bool complete = false;
+  for (int step = 0; step < 30 && !complete; ++step) {
+    const PlanResult r = ex.plan(Pose2D(robot.x(), robot.y(), 0.0));
+    ASSERT_TRUE(r.success) << r.message;
+    complete = r.complete;
+    if (complete) break;
+    ASSERT_TRUE(test::polylineOnAccessible(r.geometry, r.accessible, r.path)) << "step " << step;
+    for (size_t i = 1; i < r.path.size(); ++i) {
+      ASSERT_TRUE(s.free.at<uint8_t>(s.geometry.cellOf(r.path[i].x(), r.path[i].y())));  // on the true floor
+      if (r.scan_at[i]) ex.addScan(index++, Pose2D(r.path[i].x(), r.path[i].y(), 0.0), test::simulateScan(s, r.path[i], 3.0));
+    }
+    robot = r.target;
+  }
+  EXPECT_TRUE(complete);
+  EXPECT_GT(ex.scanCount(), 2u);
+}
+
+TEST(Explorer, BlacklistsATargetTheRobotNeverReaches) {
+  const test::Scene s = test::corridor();
+  ExplorerConfig cfg;
+  cfg.blacklist_radius_m = 1.0;
+  Explorer ex(cfg);
+  const Eigen::Vector2d robot(0.5, 0.6);
+  ex.addScan(0, Pose2D(robot.x(), robot.y(), 0.0), test::simulateScan(s, robot, 3.0));
+  const PlanResult first = ex.plan(Pose2D(robot.x(), robot.y(), 0.0));
+  ASSERT_TRUE(first.success && !first.complete) << first.message;
+  // The robot stays put (say, the drive keeps failing): the same target is tried
+  // max_failed_attempts times, then blacklisted and never chosen again; planning ends.
+  std::vector<Eigen::Vector2d> targets{first.target};
+  bool complete = false;
+  for (int i = 0; i < 400 && !complete; ++i) {
+    const PlanResult r = ex.plan(Pose2D(robot.x(), robot.y(), 0.0));
+    ASSERT_TRUE(r.success) << r.message;
+    complete = r.complete;
+    if (!complete) {
+      for (const auto& b : ex.blacklisted()) EXPECT_GT((r.target - b.first).norm(), b.second) << "blacklisted target retried";
+      targets.push_back(r.target);
+    } else {
+      EXPECT_NE(r.complete_reason.find("blacklisted"), std::string::npos) << r.complete_reason;
+    }
+  }
+  EXPECT_TRUE(complete) << "planning never ended";
+  ASSERT_FALSE(ex.blacklisted().empty());
+  EXPECT_NEAR((ex.blacklisted().front().first - first.target).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((targets[1] - first.target).norm(), 0.0, 1e-9);  // retried once before blacklisting
+  EXPECT_GT((targets[2] - first.target).norm(), ex.config().blacklist_radius_m);
+}
+
+TEST(Explorer, ProgressTowardsTheTargetIsNotAFailure) {
+  const test::Scene s = test::corridor();
+  Explorer ex;
+  ex.addScan(0, Pose2D(0.5, 0.6, 0.0), test::simulateScan(s, {0.5, 0.6}, 3.0));
+  const PlanResult a = ex.plan(Pose2D(0.5, 0.6, 0.0));
+  ASSERT_TRUE(a.success && !a.complete);
+  for (int i = 0; i < 3; ++i) {  // moving towards it in small steps, re-planning each time
+    const Eigen::Vector2d p = Eigen::Vector2d(0.5, 0.6) + (a.target - Eigen::Vector2d(0.5, 0.6)) * (0.25 * (i + 1));
+    ex.plan(Pose2D(p.x(), p.y(), 0.0));
+  }
+  EXPECT_TRUE(ex.blacklisted().empty());
+}
+
+TEST(Explorer, LoadsAMapDirectory) {
+  const std::string dir = tempDir();
+  const test::Scene s = test::lShape();
+  {
+    scanstop::MapDirectory md(dir);
+    for (uint32_t i = 0; i < 2; ++i) {
+      const Pose2D pose = i == 0 ? Pose2D(0.75, 0.75, 0.3) : Pose2D(0.75, 3.5, -1.0);
+      scanstop::MapScanInfo info;
+      info.index = i;
+      info.map_pose = pose;
+      // Points are stored in base_link: transform the map-frame simulation back.
+      const auto pts = test::simulateScan(s, {pose.x, pose.y}, 4.0);
+      scanstop::PointCloud cloud;
+      const Eigen::Isometry3f T_base_map = pose.toIsometry3f().inverse();
+      for (const auto& p : pts) cloud.push_back(T_base_map * p);
+      md.append(info, cloud);
+    }
+  }
+  Explorer ex;
+  EXPECT_EQ(ex.loadMapDirectory(scanstop::MapDirectory(dir)), 2u);
+  EXPECT_EQ(ex.loadMapDirectory(scanstop::MapDirectory(dir)), 0u);  // each scan once
+  const PlanResult r = ex.plan(Pose2D(0.75, 3.5, 0.0));
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_EQ(r.states.at<uint8_t>(r.geometry.cellOf(4.0, 0.75)), kFloor);
+  EXPECT_EQ(r.states.at<uint8_t>(r.geometry.cellOf(0.75, 4.5)), kFloor);
+  std::system(("rm -rf " + dir).c_str());
+}
+
+TEST(Render, ImagesJsonAndOccupancy) {
+  const test::Scene s = test::twoRooms();
+  Explorer ex;
+  ex.addScan(0, Pose2D(1.0, 1.0, 0.0), test::simulateScan(s, {1.0, 1.0}, 4.0));
+  const PlanResult r = ex.plan(Pose2D(1.0, 1.0, 0.0));
+  ASSERT_TRUE(r.success);
+  const auto images = renderPlanImages(r, 2);
+  ASSERT_EQ(images.size(), 5u);
+  const char* names[] = {"floor", "distance", "cost", "knowledge", "evaluation"};
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(images[i].first, names[i]);
+    EXPECT_EQ(images[i].second.cols, 2 * r.geometry.width);
+    EXPECT_EQ(images[i].second.rows, 2 * r.geometry.height);
+  }
+  // North up: the robot (green) is drawn near the bottom-left, where (1, 1) is.
+  const cv::Mat& fl = images[0].second;
+  const Eigen::Vector2d q = r.geometry.toGrid({1.0, 1.0}) * 2;
+  const cv::Point rp(static_cast<int>(std::lround(q.x())), static_cast<int>(std::lround(q.y())));
+  const cv::Vec3b px = fl.at<cv::Vec3b>(fl.rows - 1 - rp.y, rp.x - static_cast<int>(0.2 / 0.05 * 2));
+  EXPECT_EQ(px, cv::Vec3b(0, 200, 0));
+  const std::string dir = tempDir();
+  writePlanImages(r, dir, "step_000_", 2);
+  for (const char* n : names) EXPECT_FALSE(cv::imread(dir + "/step_000_" + n + ".png").empty()) << n;
+  EXPECT_THROW(writePlanImages(r, dir + "/missing", "x_", 2), scanstop::IoError);
+  std::system(("rm -rf " + dir).c_str());
+
+  const std::string json = planToJson(r);
+  for (const char* key : {"\"path\"", "\"target\"", "\"score\"", "\"complete\"", "\"coverage\"", "\"scan\": true"})
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  EXPECT_EQ(std::count(json.begin(), json.end(), '{'), std::count(json.begin(), json.end(), '}'));
+  EXPECT_EQ(pathToCsv(r).substr(0, 9), "x,y,scan\n");
+
+  const auto occ = statesToOccupancy(r.states);
+  ASSERT_EQ(occ.size(), static_cast<size_t>(r.geometry.width * r.geometry.height));
+  const cv::Point fc = r.geometry.cellOf(1.0, 1.0);
+  EXPECT_EQ(occ[fc.y * r.geometry.width + fc.x], 0);
+  const auto cost = scaledToOccupancy(r.cost_map.cost, r.cost_map.predecessor >= 0);
+  EXPECT_EQ(*std::max_element(cost.begin(), cost.end()), 100);
+  EXPECT_EQ(*std::min_element(cost.begin(), cost.end()), -1);
+}
