@@ -49,6 +49,15 @@ void Explorer::blacklist(const Eigen::Vector2d& center_map, double radius_m) {
   blacklist_.emplace_back(center_map, radius_m);
 }
 
+bool Explorer::markUnreachable(const Eigen::Vector2d& target_map) {
+  if (!target_map.allFinite()) return false;
+  for (const auto& b : blacklist_)
+    if ((b.first - target_map).norm() < 1e-3) return false;
+  blacklist_.emplace_back(target_map, config_.blacklist_radius_m);
+  if (last_.active && (last_.target - target_map).norm() <= config_.blacklist_radius_m) last_.active = false;
+  return true;
+}
+
 PlanResult Explorer::plan(const Pose2D& T_map_base) {
   const auto t0 = std::chrono::steady_clock::now();
   PlanInput input;

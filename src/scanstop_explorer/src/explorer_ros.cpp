@@ -137,6 +137,9 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
     return finish();
   }
   loadMapDir();  // scans published before this node started
+  for (const geometry_msgs::Point& u : req.unreachable)
+    if (explorer_->markUnreachable(Eigen::Vector2d(u.x, u.y)))
+      ROS_INFO("explorer_node: target (%.2f, %.2f) blacklisted as unreachable by the caller", u.x, u.y);
   const PlanResult r = explorer_->plan(robot);
   const ros::Time now = ros::Time::now();
   res.success = r.success;

@@ -140,6 +140,21 @@ TEST(Explorer, BlacklistsATargetTheRobotNeverReaches) {
   EXPECT_GT((targets[2] - first.target).norm(), ex.config().blacklist_radius_m);
 }
 
+TEST(Explorer, TargetsReportedUnreachableAreNeverChosenAgain) {
+  const test::Scene s = test::twoRooms();
+  Explorer ex;
+  ex.addScan(0, Pose2D(1.0, 1.0, 0.0), test::simulateScan(s, {1.0, 1.0}, 3.0));
+  const PlanResult a = ex.plan(Pose2D(1.0, 1.0, 0.0));
+  ASSERT_TRUE(a.success && !a.complete) << a.message;
+  EXPECT_TRUE(ex.markUnreachable(a.target));
+  EXPECT_FALSE(ex.markUnreachable(a.target));  // reported again (the caller sends its whole list): no duplicate
+  EXPECT_EQ(ex.blacklisted().size(), 1u);
+  const PlanResult b = ex.plan(Pose2D(1.0, 1.0, 0.0));
+  ASSERT_TRUE(b.success && !b.complete) << b.message;
+  EXPECT_GT((b.target - a.target).norm(), ex.config().blacklist_radius_m);
+  EXPECT_EQ(b.blacklist.at<uint8_t>(b.geometry.cellOf(a.target.x(), a.target.y())), 1);
+}
+
 TEST(Explorer, ProgressTowardsTheTargetIsNotAFailure) {
   const test::Scene s = test::corridor();
   Explorer ex;

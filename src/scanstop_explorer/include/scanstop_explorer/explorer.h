@@ -51,6 +51,9 @@ class Explorer {
 
   /// Excludes a disc from all future targets and from the termination test.
   void blacklist(const Eigen::Vector2d& center_map, double radius_m);
+  /// A target the caller failed to reach: blacklists a disc of blacklist_radius_m around it unless
+  /// that point is blacklisted already. Returns true when it was new.
+  bool markUnreachable(const Eigen::Vector2d& target_map);
   const std::vector<std::pair<Eigen::Vector2d, double>>& blacklisted() const { return blacklist_; }
 
   size_t scanCount() const { return scans_.size(); }
