@@ -74,6 +74,7 @@ std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& 
     cv::sqrt(d, d);
     cv::Mat dimg = grey(d, res.accessible);
     if (!res.skeleton.empty()) dimg.setTo(cv::Scalar(255, 120, 0), res.skeleton);
+    if (!res.anchors.empty()) dimg.setTo(cv::Scalar(0, 255, 255), res.anchors);
     out.emplace_back("distance", dimg);
   }
   if (!res.cost_map.cost.empty()) out.emplace_back("cost", grey(res.cost_map.cost, res.cost_map.predecessor >= 0));

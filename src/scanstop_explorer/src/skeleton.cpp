@@ -1,5 +1,7 @@
 #include "scanstop_explorer/skeleton.h"
 
+#include <algorithm>
+#include <cmath>
 #include <deque>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -127,6 +129,21 @@ cv::Mat findAnchors(const cv::Mat& sq_dt, const cv::Mat& mask) {
       if (is_max) anchors.at<uint8_t>(r, c) = 1;
     }
   thinPreservingEnds(anchors);
+  // One anchor per maximal disc: strongest first; a maximum inside a kept anchor's disc is dropped
+  // (discretisation makes many weak maxima on the flanks of wide ridges and plateaus).
+  std::vector<std::pair<int, cv::Point>> candidates;
+  for (int r = 0; r < anchors.rows; ++r)
+    for (int c = 0; c < anchors.cols; ++c)
+      if (anchors.at<uint8_t>(r, c)) candidates.emplace_back(sq_dt.at<int>(r, c), cv::Point(c, r));
+  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  cv::Mat covered = cv::Mat::zeros(mask.size(), CV_8U);
+  anchors.setTo(0);
+  for (const auto& [sq, p] : candidates) {
+    if (covered.at<uint8_t>(p)) continue;
+    anchors.at<uint8_t>(p) = 1;
+    const int radius = static_cast<int>(std::floor(std::sqrt(static_cast<double>(sq)))) - 1;
+    if (radius > 0) cv::circle(covered, p, radius, cv::Scalar(1), cv::FILLED);
+  }
   return anchors;
 }
 

@@ -14,7 +14,7 @@ namespace explorer {
 
 /// Images of one step (BGR, north up, `scale` pixels per cell), in this order: "floor" (grey
 /// floor, red obstacles, black unknown), "distance" (distance transform of the accessible floor,
-/// skeleton in blue), "cost" (brighter = farther), "knowledge" (brighter = more), "evaluation"
+/// skeleton in blue, anchors in yellow), "cost" (brighter = farther), "knowledge" (brighter = more), "evaluation"
 /// (brighter = better; the target is the brightest cell). Each has the robot (green), the
 /// landmarks (red), the path (cyan) and the target (magenta) drawn in.
 std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& result, int scale = 2);

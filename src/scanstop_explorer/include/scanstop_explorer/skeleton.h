@@ -35,8 +35,9 @@ const std::array<uint8_t, 256>& pruningTable();
 const std::array<uint8_t, 256>& specialPointTable();
 
 /// Anchor pixels (CV_8U 0/1): local maxima of the squared distance transform `sq_dt` (CV_32S)
-/// over the foreground of `mask` (no 8-neighbour in the mask is larger), thinned to lines
-/// (thinPreservingEnds) so plateaus do not make the skeleton thick.
+/// over the foreground of `mask` (no 8-neighbour in the mask is larger), one per maximal disc:
+/// taken strongest first, a maximum lying inside the disc (radius - 1 cell) of a kept anchor is
+/// dropped, so plateaus and the many weak maxima of wide ridges give few anchors.
 cv::Mat findAnchors(const cv::Mat& sq_dt, const cv::Mat& mask);
 
 /// Removes 4-simple pixels that are not branch ends, in raster sweeps until nothing changes; pixels
