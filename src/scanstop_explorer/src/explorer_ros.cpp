@@ -38,6 +38,7 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "grid_margin", c.floor.margin_m);
   optional(pnh, "min_floor_points", c.floor.min_floor_points);
   optional(pnh, "min_obstacle_points", c.floor.min_obstacle_points);
+  optional(pnh, "floor_fill_radius", c.floor.fill_radius_m);
   optional(pnh, "robot_radius", c.planner.robot_radius_m);
   optional(pnh, "d_max", c.planner.d_max_m);
   optional(pnh, "k_r", c.planner.k_r_m);

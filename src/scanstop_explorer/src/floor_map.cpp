@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <opencv2/imgproc.hpp>
+
 #include "scanstop_common/config.h"
 
 namespace scanstop {
@@ -21,6 +23,7 @@ void FloorConfig::validate() const {
   requireInRange("min_floor_points", min_floor_points, 1, 1000);
   requireInRange("min_obstacle_points", min_obstacle_points, 1, 1000);
   requireInRange("max_extent_m", max_extent_m, 1e-3, 1e4, "m");
+  requireInRange("fill_radius_m", fill_radius_m, 0.0, 1.0, "m");
 }
 
 FloorMap::FloorMap(const FloorConfig& config) : config_(config) {
@@ -116,7 +119,17 @@ cv::Mat FloorMap::states() const {
       else if (f[c] >= config_.min_floor_points || k[c]) out[c] = kFloor;
     }
   }
+  fillFloorGaps(s, config_.fill_radius_m / config_.resolution_m);
   return s;
+}
+
+void fillFloorGaps(cv::Mat& states, double radius_cells) {
+  const int r = static_cast<int>(std::floor(radius_cells));
+  if (r < 1 || states.empty()) return;
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1));
+  cv::Mat closed;
+  cv::morphologyEx(states == kFloor, closed, cv::MORPH_CLOSE, kernel);
+  states.setTo(kFloor, closed & (states == kUnknown));
 }
 
 }  // namespace explorer

@@ -65,6 +65,24 @@ TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
   EXPECT_NEAR((g0.center(g0.cellOf(0.51, 0.51)) - g1.center(g1.cellOf(0.51, 0.51))).norm(), 0.0, 1e-9);
 }
 
+TEST(FloorMap, FillsNarrowGapsButNotTheFrontier) {
+  cv::Mat s = cv::Mat::zeros(40, 60, CV_8U);
+  s(cv::Rect(0, 0, 60, 20)).setTo(kFloor);                       // floor below row 20, unknown above
+  for (int c = 30; c < 60; c += 3) s(cv::Rect(c, 0, 1, 20)).setTo(kUnknown);  // 1-cell radial gaps
+  s(cv::Rect(5, 5, 6, 6)).setTo(kUnknown);                        // a 6-cell hole: wider than 2 r
+  s.at<uint8_t>(15, 31) = kObstacle;                              // an obstacle inside a gap stays
+  cv::Mat filled = s.clone();
+  fillFloorGaps(filled, 2.0);
+  EXPECT_EQ(filled.at<uint8_t>(10, 30), kFloor);
+  EXPECT_EQ(filled.at<uint8_t>(10, 57), kFloor);
+  EXPECT_EQ(filled.at<uint8_t>(15, 31), kObstacle);
+  EXPECT_EQ(filled.at<uint8_t>(8, 8), kUnknown);  // centre of the wide hole
+  EXPECT_EQ(cv::countNonZero(filled(cv::Rect(0, 20, 60, 20))), 0);  // the frontier did not move
+  cv::Mat off = s.clone();
+  fillFloorGaps(off, 0.0);
+  EXPECT_EQ(cv::countNonZero(off != s), 0);
+}
+
 TEST(FloorMap, ValidatesConfig) {
   FloorConfig c;
   c.resolution_m = 0.0;

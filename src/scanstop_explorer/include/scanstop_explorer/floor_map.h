@@ -12,6 +12,11 @@ namespace scanstop {
 namespace explorer {
 
 /// Cell states of the floor grid (CV_8U values).
+/// Fills unknown gaps of the floor: unknown cells in the morphological closing of the floor cells
+/// with a disc of radius_cells become floor (obstacles never change; a straight floor border
+/// does not move).
+void fillFloorGaps(cv::Mat& states, double radius_cells);
+
 enum CellState : uint8_t {
   kUnknown = 0,   ///< no floor and no obstacle point
   kFloor = 1,     ///< floor points only (or known free: the robot stood there)
@@ -27,6 +32,9 @@ struct FloorConfig {
   int min_floor_points = 1;       ///< floor points a cell needs to count as floor, [1, 1000]
   int min_obstacle_points = 1;    ///< obstacle points that make a cell an obstacle, [1, 1000]
   double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
+  double fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
+                                  ///< (morphological closing of the floor over unknown cells only;
+                                  ///< 0 = off, the thesis' plain extraction) [m], [0, 1]
 
   /// Throws ConfigError naming the parameter, its value and the allowed range.
   void validate() const;
@@ -45,7 +53,7 @@ class FloorMap {
   /// the scanner cannot see the floor under the robot). Obstacle cells stay obstacles.
   void addKnownFree(const Eigen::Vector2d& center_map, double radius_m);
 
-  /// Cell states (CV_8U, CellState values) with geometry().
+  /// Cell states (CV_8U, CellState values) with geometry(), after the gap filling.
   cv::Mat states() const;
   const GridGeometry& geometry() const { return geometry_; }
   const FloorConfig& config() const { return config_; }
