@@ -54,19 +54,16 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
   g.width = static_cast<int>(ix1 - ix0);
   g.height = static_cast<int>(iy1 - iy0);
   cv::Mat floor = cv::Mat::zeros(g.height, g.width, CV_32S), obstacle = cv::Mat::zeros(g.height, g.width, CV_32S);
-  cv::Mat free = cv::Mat::zeros(g.height, g.width, CV_8U);
   if (!empty()) {
     const int dx = static_cast<int>(std::lround((geometry_.origin_x - g.origin_x) / res));
     const int dy = static_cast<int>(std::lround((geometry_.origin_y - g.origin_y) / res));
     const cv::Rect roi(dx, dy, geometry_.width, geometry_.height);
     floor_hits_.copyTo(floor(roi));
     obstacle_hits_.copyTo(obstacle(roi));
-    known_free_.copyTo(free(roi));
   }
   geometry_ = g;
   floor_hits_ = floor;
   obstacle_hits_ = obstacle;
-  known_free_ = free;
 }
 
 size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
@@ -100,11 +97,7 @@ size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
 void FloorMap::addKnownFree(const Eigen::Vector2d& center_map, double radius_m) {
   if (!center_map.allFinite() || !(radius_m > 0.0)) return;
   ensureContains(center_map.array() - radius_m, center_map.array() + radius_m);
-  const cv::Point c0 = geometry_.cellOf(center_map.x() - radius_m, center_map.y() - radius_m);
-  const cv::Point c1 = geometry_.cellOf(center_map.x() + radius_m, center_map.y() + radius_m);
-  for (int r = std::max(0, c0.y); r <= std::min(geometry_.height - 1, c1.y); ++r)
-    for (int c = std::max(0, c0.x); c <= std::min(geometry_.width - 1, c1.x); ++c)
-      if ((geometry_.center({c, r}) - center_map).norm() <= radius_m) known_free_.at<uint8_t>(r, c) = 1;
+  known_free_.emplace_back(center_map, radius_m);
 }
 
 cv::Mat FloorMap::states() const {
@@ -112,13 +105,28 @@ cv::Mat FloorMap::states() const {
   for (int r = 0; r < geometry_.height; ++r) {
     const int* f = floor_hits_.ptr<int>(r);
     const int* o = obstacle_hits_.ptr<int>(r);
-    const uint8_t* k = known_free_.ptr<uint8_t>(r);
     uint8_t* out = s.ptr<uint8_t>(r);
     for (int c = 0; c < geometry_.width; ++c) {
       if (o[c] >= config_.min_obstacle_points) out[c] = kObstacle;
-      else if (f[c] >= config_.min_floor_points || k[c]) out[c] = kFloor;
+      else if (f[c] >= config_.min_floor_points) out[c] = kFloor;
     }
   }
+  // Known free discs: unknown cells the robot's position sees without crossing an obstacle cell.
+  cv::Mat add = cv::Mat::zeros(s.size(), CV_8U);
+  for (const auto& [center, radius] : known_free_) {
+    const cv::Point c0 = geometry_.cellOf(center.x(), center.y());
+    const int rc = static_cast<int>(std::ceil(radius / geometry_.resolution));
+    for (int r = std::max(0, c0.y - rc); r <= std::min(geometry_.height - 1, c0.y + rc); ++r)
+      for (int c = std::max(0, c0.x - rc); c <= std::min(geometry_.width - 1, c0.x + rc); ++c) {
+        if (s.at<uint8_t>(r, c) != kUnknown || add.at<uint8_t>(r, c)) continue;
+        if ((geometry_.center({c, r}) - center).norm() > radius) continue;
+        bool blocked = false;
+        cv::LineIterator it(s, c0, cv::Point(c, r), 4);
+        for (int i = 0; i < it.count && !blocked; ++i, ++it) blocked = **it == kObstacle;
+        if (!blocked) add.at<uint8_t>(r, c) = 1;
+      }
+  }
+  s.setTo(kFloor, add);
   fillFloorGaps(s, config_.fill_radius_m / config_.resolution_m);
   return s;
 }

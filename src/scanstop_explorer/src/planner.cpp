@@ -394,12 +394,12 @@ cv::Mat evaluationMap(const cv::Mat& knowledge, const cv::Mat& cost_cells, doubl
   return b;
 }
 
-cv::Point argmaxCell(const cv::Mat& evaluation) {
+cv::Point argmaxCell(const cv::Mat& evaluation, const cv::Mat& candidates) {
   cv::Point best(-1, -1);
   float best_b = 0.0f;
   for (int r = 0; r < evaluation.rows; ++r)
     for (int c = 0; c < evaluation.cols; ++c)
-      if (evaluation.at<float>(r, c) > best_b) {
+      if (evaluation.at<float>(r, c) > best_b && (candidates.empty() || candidates.at<uint8_t>(r, c))) {
         best_b = evaluation.at<float>(r, c);
         best = cv::Point(c, r);
       }
@@ -558,11 +558,11 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     res.message = "exploration complete";
     return;
   }
-  res.target_cell = argmaxCell(res.evaluation);
+  res.target_cell = argmaxCell(res.evaluation, res.knowledge < cfg.knowledge_threshold);
   if (res.target_cell.x < 0) {
     res.complete = true;
-    res.complete_reason = "every reachable target is blacklisted as unreachable (" + std::to_string(res.open_cells) +
-                          " open cells left)";
+    res.complete_reason = "every reachable cell that lacks knowledge is blacklisted as unreachable (" +
+                          std::to_string(res.open_cells) + " open cells left)";
     res.message = "exploration complete";
     return;
   }

@@ -67,6 +67,7 @@ std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& 
   cv::Mat floor = cv::Mat::zeros(res.states.size(), CV_8UC3);
   floor.setTo(cv::Scalar(128, 128, 128), res.states == kFloor);
   floor.setTo(cv::Scalar(0, 0, 220), res.states == kObstacle);
+  if (!res.open.empty()) floor.setTo(cv::Scalar(0, 160, 255), res.open);  // open cells (termination test)
   out.emplace_back("floor", floor);
   if (!res.sq_dt.empty()) {
     cv::Mat d;

@@ -254,3 +254,57 @@ TEST(Render, ImagesJsonAndOccupancy) {
   EXPECT_EQ(*std::max_element(cost.begin(), cost.end()), 100);
   EXPECT_EQ(*std::min_element(cost.begin(), cost.end()), -1);
 }
+
+#include "rotating_scanner.h"
+
+// The room of chapter 8 (10 x 8 m) with a thin-legged table and a cabinet, scanned by a rotating
+// 2D scanner model (4 m range): the explorer must drive only collision-free paths, stop by its
+// termination criterion, and have seen most of the floor by then.
+TEST(Explorer, ExploresA10x8RoomFromRotatingScannerScans) {
+  test::BoxWorld w;
+  const double lx = 4.0, ly = 3.0;  // table legs (4 cm) and top (0.75 m, above the robot's layer)
+  for (double dx : {0.0, 1.4})
+    for (double dy : {0.0, 0.8}) w.boxes.push_back({{lx + dx, ly + dy, 0.0}, {lx + dx + 0.04, ly + dy + 0.04, 0.72}});
+  w.boxes.push_back({{lx, ly, 0.72}, {lx + 1.44, ly + 0.84, 0.75}});
+  w.boxes.push_back({{8.5, 6.0, 0.0}, {10.0, 8.0, 1.8}});  // cabinet in a corner
+  Explorer ex;
+  Eigen::Vector2d robot(1.5, 1.5);
+  uint32_t index = 0;
+  ex.addScan(index++, Pose2D(robot.x(), robot.y(), 0.0), test::rotatingScan(w, robot));
+  bool complete = false;
+  int steps = 0;
+  PlanResult r;
+  for (; steps < 150 && !complete; ++steps) {
+    r = ex.plan(Pose2D(robot.x(), robot.y(), 0.0));
+    if (std::getenv("EXPLORER_TEST_IMAGES")) {
+      writePlanImages(r, std::getenv("EXPLORER_TEST_IMAGES"), "step_" + std::to_string(steps) + "_", 3);
+      std::printf("step %d: %s\n", steps, r.message.c_str());
+    }
+    ASSERT_TRUE(r.success) << r.message;
+    complete = r.complete;
+    if (complete) break;
+    for (size_t i = 1; i < r.path.size(); ++i) {
+      for (int k = 0; k <= 20; ++k) {
+        const Eigen::Vector2d p = r.path[i - 1] + (r.path[i] - r.path[i - 1]) * (k / 20.0);
+        ASSERT_TRUE(w.discFree(p, 0.25, 0.6)) << "step " << steps << ": collision at (" << p.x() << ", " << p.y() << ")";
+      }
+      if (r.scan_at[i]) ex.addScan(index++, Pose2D(r.path[i].x(), r.path[i].y(), 0.0), test::rotatingScan(w, r.path[i]));
+    }
+    robot = r.target;
+  }
+  EXPECT_TRUE(complete) << "not complete after " << steps << " plans, " << ex.scanCount() << " scans";
+  // Most of the true floor was seen (the floor under the cabinet cannot be).
+  const GridGeometry& g = r.geometry;
+  int seen = 0, total = 0;
+  for (double x = 0.1; x < 10.0; x += 0.1)
+    for (double y = 0.1; y < 8.0; y += 0.1) {
+      if (x > 8.5 && y > 6.0) continue;
+      ++total;
+      const cv::Point c = g.cellOf(x, y);
+      seen += g.contains(c) && r.states.at<uint8_t>(c) == kFloor;
+    }
+  EXPECT_GT(static_cast<double>(seen) / total, 0.9) << seen << " of " << total;
+  EXPECT_GT(r.coverage, 0.9);
+  std::printf("[ info ] 10 x 8 m room: complete after %d plans, %zu scans, floor seen %.1f %%, reason: %s\n", steps,
+              ex.scanCount(), 100.0 * seen / total, r.complete_reason.c_str());
+}

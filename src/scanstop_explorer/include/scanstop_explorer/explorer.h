@@ -20,7 +20,10 @@ namespace explorer {
 struct ExplorerConfig {
   FloorConfig floor;
   PlannerConfig planner;
-  double known_free_radius_m = 0.3;   ///< floor disc marked free around each scan pose [m], [0, 5]
+  /// Floor disc around each scan pose taken as floor where unknown: the scanner cannot see the floor
+  /// under and near the robot (a 240 deg fan turned about the vertical axis misses a cone of
+  /// half-angle 60 deg below it: radius = scanner height * tan(60 deg), 0.78 m at 0.45 m) [m], [0, 5]
+  double known_free_radius_m = 0.8;
   double target_tolerance_m = 0.3;    ///< robot this close to the last target: it was reached [m], (0, 10]
   double progress_m = 0.2;            ///< the travel distance to an unreached target must shrink by this per plan [m], [0, 10]
   int max_failed_attempts = 2;        ///< plans without progress before a target is blacklisted, [1, 100]

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <utility>
 #include <vector>
 
 #include "scanstop_explorer/grid.h"
@@ -50,7 +51,8 @@ class FloorMap {
   /// margin_m. Returns the number of points that marked floor or obstacle.
   size_t addPoints(const std::vector<Eigen::Vector3f>& points_map);
   /// Marks the disc of radius_m around a map point as known free floor (where the robot stood;
-  /// the scanner cannot see the floor under the robot). Obstacle cells stay obstacles.
+  /// the scanner cannot see the floor under the robot): unknown cells of the disc that the centre
+  /// sees without crossing an obstacle cell become floor. Obstacle cells stay obstacles.
   void addKnownFree(const Eigen::Vector2d& center_map, double radius_m);
 
   /// Cell states (CV_8U, CellState values) with geometry(), after the gap filling.
@@ -67,7 +69,7 @@ class FloorMap {
   GridGeometry geometry_;
   cv::Mat floor_hits_;     ///< CV_32S
   cv::Mat obstacle_hits_;  ///< CV_32S
-  cv::Mat known_free_;     ///< CV_8U
+  std::vector<std::pair<Eigen::Vector2d, double>> known_free_;  ///< discs (centre [m], radius [m])
 };
 
 }  // namespace explorer

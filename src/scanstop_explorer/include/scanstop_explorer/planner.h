@@ -106,8 +106,9 @@ cv::Mat knowledgeMap(const GridGeometry& geometry, const std::vector<Eigen::Vect
 /// (CV_8U, may be empty); 0 elsewhere. CV_32F.
 cv::Mat evaluationMap(const cv::Mat& knowledge, const cv::Mat& cost_cells, double resolution, double k0, double c0,
                       const cv::Mat& blacklist);
-/// The cell with the largest b (first in raster order on ties); (-1, -1) if every b is 0.
-cv::Point argmaxCell(const cv::Mat& evaluation);
+/// The cell with the largest b (first in raster order on ties) among the cells set in `candidates`
+/// (CV_8U; empty = all); (-1, -1) if every candidate's b is 0.
+cv::Point argmaxCell(const cv::Mat& evaluation, const cv::Mat& candidates = cv::Mat());
 
 /// Path back through the predecessors, in continuous cell coordinates: robot node, landmarks, target
 /// cell centre; with the node index of each waypoint (-1 for the target).
@@ -166,6 +167,9 @@ struct PlanResult {
 /// Runs every stage up to the cost and knowledge maps (no target yet).
 PlanResult computeMaps(const PlanInput& input, const PlannerConfig& config);
 /// Evaluation, termination, target and path on the maps of `result` with the input's blacklist.
+/// The target is the argmax of b among the reached cells that lack knowledge (k <
+/// knowledge_threshold; Algorithm 5 line 10: "low knowledge and low cost"): so every scan removes
+/// candidates and the robot never dithers between already scanned spots.
 void choosePlan(PlanResult& result, const PlanInput& input, const PlannerConfig& config);
 /// computeMaps + choosePlan.
 PlanResult planStep(const PlanInput& input, const PlannerConfig& config);

@@ -13,7 +13,7 @@ namespace scanstop {
 namespace explorer {
 
 /// Images of one step (BGR, north up, `scale` pixels per cell), in this order: "floor" (grey
-/// floor, red obstacles, black unknown), "distance" (distance transform of the accessible floor,
+/// floor, red obstacles, black unknown, orange: open cells that keep exploration going), "distance" (distance transform of the accessible floor,
 /// skeleton in blue, anchors in yellow), "cost" (brighter = farther), "knowledge" (brighter = more), "evaluation"
 /// (brighter = better; the target is the brightest cell). Each has the robot (green), the
 /// landmarks (red), the path (cyan) and the target (magenta) drawn in.
