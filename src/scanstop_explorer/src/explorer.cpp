@@ -12,6 +12,7 @@ void ExplorerConfig::validate() const {
   floor.validate();
   planner.validate();
   requireInRange("known_free_radius_m", known_free_radius_m, 0.0, 5.0, "m");
+  requireInRange("self_filter_radius_m", self_filter_radius_m, 0.0, 5.0, "m");
   requireInRange("target_tolerance_m", target_tolerance_m, 1e-6, 10.0, "m");
   requireInRange("progress_m", progress_m, 0.0, 10.0, "m");
   requireInRange("max_failed_attempts", max_failed_attempts, 1, 100);
@@ -23,7 +24,13 @@ Explorer::Explorer(const ExplorerConfig& config) : config_(config), floor_(confi
 bool Explorer::addScan(uint32_t index, const Pose2D& T_map_base, const std::vector<Eigen::Vector3f>& points_map) {
   if (scans_.count(index)) return false;
   scans_[index] = T_map_base;
-  floor_.addPoints(points_map);
+  const Eigen::Vector2f center(static_cast<float>(T_map_base.x), static_cast<float>(T_map_base.y));
+  const float r2 = static_cast<float>(config_.self_filter_radius_m * config_.self_filter_radius_m);
+  std::vector<Eigen::Vector3f> kept;
+  kept.reserve(points_map.size());
+  for (const Eigen::Vector3f& p : points_map)
+    if ((p.head<2>() - center).squaredNorm() >= r2) kept.push_back(p);
+  floor_.addPoints(kept);
   floor_.addKnownFree(Eigen::Vector2d(T_map_base.x, T_map_base.y), config_.known_free_radius_m);
   return true;
 }

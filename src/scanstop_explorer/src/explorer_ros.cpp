@@ -49,6 +49,7 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "start_snap", c.planner.start_snap_m);
   optional(pnh, "max_coverage_landmarks", c.planner.max_coverage_landmarks);
   optional(pnh, "known_free_radius", c.known_free_radius_m);
+  optional(pnh, "self_filter_radius", c.self_filter_radius_m);
   optional(pnh, "target_tolerance", c.target_tolerance_m);
   optional(pnh, "progress", c.progress_m);
   optional(pnh, "max_failed_attempts", c.max_failed_attempts);

@@ -85,11 +85,23 @@ size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
   }
   if (used == 0) return 0;
   ensureContains(lo, hi);
+  std::vector<std::pair<int, int>> obstacle_cells;  // (linear index, points of this scan)
   for (size_t i = 0; i < points_map.size(); ++i) {
     if (kind[i] == 0) continue;
     const cv::Point c = geometry_.cellOf(points_map[i].x(), points_map[i].y());
     if (!geometry_.contains(c)) continue;  // cannot happen after ensureContains
-    (kind[i] == 1 ? floor_hits_ : obstacle_hits_).at<int>(c)++;
+    if (kind[i] == 1) floor_hits_.at<int>(c)++;
+    else obstacle_cells.emplace_back(c.y * geometry_.width + c.x, 1);
+  }
+  // Obstacle evidence counts per scan: a cell becomes an obstacle when this scan alone put
+  // min_obstacle_points points into it.
+  std::sort(obstacle_cells.begin(), obstacle_cells.end());
+  for (size_t i = 0; i < obstacle_cells.size();) {
+    size_t j = i;
+    while (j < obstacle_cells.size() && obstacle_cells[j].first == obstacle_cells[i].first) ++j;
+    if (static_cast<int>(j - i) >= config_.min_obstacle_points)
+      obstacle_hits_.at<int>(obstacle_cells[i].first / geometry_.width, obstacle_cells[i].first % geometry_.width)++;
+    i = j;
   }
   return used;
 }
@@ -107,7 +119,7 @@ cv::Mat FloorMap::states() const {
     const int* o = obstacle_hits_.ptr<int>(r);
     uint8_t* out = s.ptr<uint8_t>(r);
     for (int c = 0; c < geometry_.width; ++c) {
-      if (o[c] >= config_.min_obstacle_points) out[c] = kObstacle;
+      if (o[c] > 0) out[c] = kObstacle;
       else if (f[c] >= config_.min_floor_points) out[c] = kFloor;
     }
   }

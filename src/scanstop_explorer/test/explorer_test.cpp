@@ -49,7 +49,7 @@ TEST(FloorMap, LayersMarkFloorObstaclesAndUnknown) {
 
 TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
   FloorMap fm;
-  fm.addPoints({{0.51f, 0.51f, 0.0f}, {1.01f, 0.51f, 0.3f}});
+  fm.addPoints({{0.51f, 0.51f, 0.0f}, {1.01f, 0.51f, 0.3f}, {1.02f, 0.52f, 0.5f}});
   const GridGeometry g0 = fm.geometry();
   fm.addPoints({{10.02f, -7.98f, 0.0f}});
   const GridGeometry g1 = fm.geometry();
@@ -63,6 +63,21 @@ TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
   EXPECT_EQ(cv::countNonZero(s), 3);
   // The lattice is global: the cell of a point has the same centre before and after growing.
   EXPECT_NEAR((g0.center(g0.cellOf(0.51, 0.51)) - g1.center(g1.cellOf(0.51, 0.51))).norm(), 0.0, 1e-9);
+}
+
+TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
+  FloorMap fm;  // min_obstacle_points = 2
+  for (int scan = 0; scan < 5; ++scan) fm.addPoints({{2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});  // one stray point per scan
+  cv::Mat s = fm.states();
+  EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kUnknown);
+  fm.addPoints({{2.01f, 2.01f, 0.3f}, {2.02f, 2.03f, 0.5f}});  // two in one scan
+  s = fm.states();
+  EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kObstacle);
+  FloorConfig one;
+  one.min_obstacle_points = 1;
+  FloorMap fm1(one);
+  fm1.addPoints({{2.01f, 2.01f, 0.3f}});
+  EXPECT_EQ(fm1.states().at<uint8_t>(fm1.geometry().cellOf(2.01, 2.01)), kObstacle);
 }
 
 TEST(FloorMap, FillsNarrowGapsButNotTheFrontier) {
@@ -92,7 +107,8 @@ TEST(FloorMap, ValidatesConfig) {
 TEST(Explorer, EachScanOnceAndKnownFreeUnderTheRobot) {
   const test::Scene s = test::tableRoom();
   Explorer ex;
-  const auto pts = test::simulateScan(s, {1.0, 1.0}, 4.0);
+  auto pts = test::simulateScan(s, {1.0, 1.0}, 4.0);
+  for (int i = 0; i < 5; ++i) pts.emplace_back(1.05f + 0.01f * i, 1.0f, 0.4f);  // the robot's own body: filtered
   EXPECT_TRUE(ex.addScan(0, Pose2D(1.0, 1.0, 0.0), pts));
   EXPECT_FALSE(ex.addScan(0, Pose2D(3.0, 1.0, 0.0), pts));
   EXPECT_EQ(ex.scanCount(), 1u);
@@ -100,6 +116,8 @@ TEST(Explorer, EachScanOnceAndKnownFreeUnderTheRobot) {
   const PlanResult r = ex.plan(Pose2D(1.0, 1.0, 0.0));
   ASSERT_TRUE(r.success) << r.message;
   EXPECT_FALSE(r.complete);
+  EXPECT_FALSE(r.robot_snapped);
+  EXPECT_EQ(r.states.at<uint8_t>(r.geometry.cellOf(1.07, 1.0)), kFloor);
   EXPECT_TRUE(test::polylineOnAccessible(r.geometry, r.accessible, r.path));
   EXPECT_EQ(r.timings_ms.front().first, "floor");
 }
@@ -258,8 +276,8 @@ TEST(Render, ImagesJsonAndOccupancy) {
 #include "rotating_scanner.h"
 
 // The room of chapter 8 (10 x 8 m) with a thin-legged table and a cabinet, scanned by a rotating
-// 2D scanner model (4 m range): the explorer must drive only collision-free paths, stop by its
-// termination criterion, and have seen most of the floor by then.
+// 2D scanner model (4 m range, 0.2 % random outlier ranges left in): the explorer must drive only
+// collision-free paths, stop by its termination criterion, and have seen most of the floor by then.
 TEST(Explorer, ExploresA10x8RoomFromRotatingScannerScans) {
   test::BoxWorld w;
   const double lx = 4.0, ly = 3.0;  // table legs (4 cm) and top (0.75 m, above the robot's layer)
@@ -270,7 +288,9 @@ TEST(Explorer, ExploresA10x8RoomFromRotatingScannerScans) {
   Explorer ex;
   Eigen::Vector2d robot(1.5, 1.5);
   uint32_t index = 0;
-  ex.addScan(index++, Pose2D(robot.x(), robot.y(), 0.0), test::rotatingScan(w, robot));
+  auto scan = [&](const Eigen::Vector2d& p) { return test::rotatingScan(w, p, 0.45, 100, 683, 4.0, 0.002, index); };
+  ex.addScan(index, Pose2D(robot.x(), robot.y(), 0.0), scan(robot));
+  ++index;
   bool complete = false;
   int steps = 0;
   PlanResult r;
@@ -288,7 +308,10 @@ TEST(Explorer, ExploresA10x8RoomFromRotatingScannerScans) {
         const Eigen::Vector2d p = r.path[i - 1] + (r.path[i] - r.path[i - 1]) * (k / 20.0);
         ASSERT_TRUE(w.discFree(p, 0.25, 0.6)) << "step " << steps << ": collision at (" << p.x() << ", " << p.y() << ")";
       }
-      if (r.scan_at[i]) ex.addScan(index++, Pose2D(r.path[i].x(), r.path[i].y(), 0.0), test::rotatingScan(w, r.path[i]));
+      if (r.scan_at[i]) {
+        ex.addScan(index, Pose2D(r.path[i].x(), r.path[i].y(), 0.0), scan(r.path[i]));
+        ++index;
+      }
     }
     robot = r.target;
   }

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 namespace scanstop {
@@ -69,9 +70,14 @@ struct BoxWorld {
 };
 
 /// A 3D scan from base_link pose (x, y) (scanner centre `height` above the floor), map frame.
+/// `outlier_rate` of the beams return a random range (uniform over (0.02, max_range]) instead, as
+/// the thesis' scanner model does (chapter 6.3); `seed` makes them repeatable.
 inline std::vector<Eigen::Vector3f> rotatingScan(const BoxWorld& w, const Eigen::Vector2d& xy, double height = 0.45,
-                                                 int planes = 100, int beams = 683, double max_range = 4.0) {
+                                                 int planes = 100, int beams = 683, double max_range = 4.0,
+                                                 double outlier_rate = 0.0, unsigned seed = 1) {
   std::vector<Eigen::Vector3f> pts;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
   const Eigen::Vector3d o(xy.x(), xy.y(), height);
   for (int p = 0; p < planes; ++p) {
     const double phi = M_PI * p / planes;  // plane azimuth
@@ -79,7 +85,8 @@ inline std::vector<Eigen::Vector3f> rotatingScan(const BoxWorld& w, const Eigen:
     for (int b = 0; b < beams; ++b) {
       const double a = -2.0 * M_PI / 3.0 + (4.0 * M_PI / 3.0) * b / (beams - 1);  // in-plane angle from +z
       const Eigen::Vector3d d = (u * std::sin(a) + Eigen::Vector3d::UnitZ() * std::cos(a)).normalized();
-      const double t = w.cast(o, d);
+      double t = w.cast(o, d);
+      if (outlier_rate > 0.0 && uni(rng) < outlier_rate) t = 0.02 + uni(rng) * (max_range - 0.02);
       if (t <= max_range && t > 0.02) pts.push_back((o + t * d).cast<float>());
     }
   }

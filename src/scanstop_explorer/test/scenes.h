@@ -106,7 +106,7 @@ inline cv::Mat visibleFree(const Scene& s, const Eigen::Vector2d& p, double rang
 }
 
 /// A simulated scan from p in the map frame: a floor point (z = 0) on every visible free cell and
-/// wall points (z = 0.3 m and 1.5 m) on every obstacle cell next to a visible free cell.
+/// wall points (z = 0.2, 0.4 and 1.5 m) on every obstacle cell next to a visible free cell.
 inline std::vector<Eigen::Vector3f> simulateScan(const Scene& s, const Eigen::Vector2d& p, double range_m) {
   const cv::Mat vis = visibleFree(s, p, range_m);
   cv::Mat near;
@@ -117,7 +117,8 @@ inline std::vector<Eigen::Vector3f> simulateScan(const Scene& s, const Eigen::Ve
       const Eigen::Vector2d q = s.geometry.center({c, r});
       if (vis.at<uint8_t>(r, c)) pts.emplace_back(q.x(), q.y(), 0.0f);
       else if (near.at<uint8_t>(r, c) && !s.free.at<uint8_t>(r, c)) {
-        pts.emplace_back(q.x(), q.y(), 0.3f);
+        pts.emplace_back(q.x(), q.y(), 0.2f);
+        pts.emplace_back(q.x(), q.y(), 0.4f);
         pts.emplace_back(q.x(), q.y(), 1.5f);
       }
     }

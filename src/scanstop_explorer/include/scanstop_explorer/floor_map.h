@@ -21,7 +21,7 @@ void fillFloorGaps(cv::Mat& states, double radius_cells);
 enum CellState : uint8_t {
   kUnknown = 0,   ///< no floor and no obstacle point
   kFloor = 1,     ///< floor points only (or known free: the robot stood there)
-  kObstacle = 2,  ///< at least min_obstacle_points points in the robot's height layer
+  kObstacle = 2,  ///< some scan put at least min_obstacle_points points into the robot's height layer
 };
 
 /// Parameters of the floor extraction.
@@ -31,7 +31,9 @@ struct FloorConfig {
   double robot_height_m = 0.6;    ///< d_robot: thickness of the obstacle layer above the floor layer [m], (0, 5]
   double margin_m = 1.0;          ///< unknown margin kept around the data when the grid grows [m], [0, 20]
   int min_floor_points = 1;       ///< floor points a cell needs to count as floor, [1, 1000]
-  int min_obstacle_points = 1;    ///< obstacle points that make a cell an obstacle, [1, 1000]
+  int min_obstacle_points = 2;    ///< obstacle-layer points ONE scan must put into a cell to make it an
+                                  ///< obstacle (real obstacles give many per scan, random outlier
+                                  ///< ranges rarely two in one cell), [1, 1000]
   double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
   double fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
                                   ///< (morphological closing of the floor over unknown cells only;
@@ -68,7 +70,7 @@ class FloorMap {
   FloorConfig config_;
   GridGeometry geometry_;
   cv::Mat floor_hits_;     ///< CV_32S
-  cv::Mat obstacle_hits_;  ///< CV_32S
+  cv::Mat obstacle_hits_;  ///< CV_32S: scans that made the cell an obstacle
   std::vector<std::pair<Eigen::Vector2d, double>> known_free_;  ///< discs (centre [m], radius [m])
 };
 
