@@ -14,6 +14,16 @@ for pkg in "${wanted[@]}"; do
   [[ "$status" == "install ok installed" ]] || missing+=("$pkg")
 done
 
+# roslaunch and rostest address this machine as "localhost"; a minimal system may lack the entry.
+if ! getent hosts localhost >/dev/null 2>&1; then
+  if [[ $(id -u) -eq 0 ]]; then
+    echo "setup: 'localhost' does not resolve (roslaunch needs it); adding '127.0.0.1 localhost' to /etc/hosts"
+    echo "127.0.0.1 localhost" >> /etc/hosts
+  else
+    echo "setup: 'localhost' does not resolve; add '127.0.0.1 localhost' to /etc/hosts (roslaunch needs it)" >&2
+  fi
+fi
+
 if [[ ${#missing[@]} -eq 0 ]]; then
   echo "setup: all ${#wanted[@]} Debian packages are installed"
   exit 0
