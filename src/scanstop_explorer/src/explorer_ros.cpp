@@ -70,6 +70,14 @@ ExplorerNode::ExplorerNode(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh) {
   readParameters(pnh, config, node_config_);
   explorer_ = std::make_unique<Explorer>(config);
   loadMapDir();
+  // Number the steps on from what an earlier run left in run_dir (a restarted node loses nothing).
+  step_ = 1;
+  for (;; ++step_) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "/step_%03u_plan.json", step_);
+    struct stat st;
+    if (node_config_.run_dir.empty() || ::stat((node_config_.run_dir + name).c_str(), &st) != 0) break;
+  }
   // Relative names, meant to be remapped.
   floor_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/floor", 1, true);
   accessible_pub_ = nh_.advertise<nav_msgs::OccupancyGrid>("explorer/accessible", 1, true);
@@ -170,10 +178,10 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
     publish(r);
     path_pub_.publish(res.path);
     writeImages(r);
-    ++step_;
   }
   ROS_INFO("explorer_node: plan %u: %s%s", step_, r.message.c_str(),
            r.complete ? (" (" + r.complete_reason + ")").c_str() : "");
+  if (r.success) ++step_;
   return finish();
 }
 

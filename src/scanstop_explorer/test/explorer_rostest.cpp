@@ -7,6 +7,7 @@
 #include <scanstop_msgs/RegisteredScan.h>
 #include <visualization_msgs/Marker.h>
 
+#include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 
 #include "scenes.h"
@@ -138,8 +139,10 @@ TEST(ExplorerNode, PlansCollisionFreePathsFromRegisteredScans) {
   EXPECT_EQ(floor.header.frame_id, "map");
   EXPECT_GT(landmarks, 0u);
   std::string run_dir;
-  ros::NodeHandle("~").getParam("run_dir", run_dir);
-  EXPECT_FALSE(cv::imread(run_dir + "/step_000_evaluation.png").empty()) << run_dir;
+  ASSERT_TRUE(ros::param::get("/explorer_node/run_dir", run_dir));
+  EXPECT_FALSE(cv::imread(run_dir + "/step_001_evaluation.png").empty()) << run_dir;
+  EXPECT_FALSE(cv::imread(run_dir + "/step_006_floor.png").empty()) << run_dir;
+  if (run_dir.rfind("/tmp/explorer_rostest_run", 0) == 0) std::system(("rm -rf " + run_dir).c_str());
 
   // A pose in another frame is refused with a clear message.
   srv.request.map_pose.header.frame_id = "odom";
