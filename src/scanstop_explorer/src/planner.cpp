@@ -333,20 +333,26 @@ CostMap computeCostMap(const cv::Mat& accessible, const std::vector<Landmark>& l
   cv::floodFill(acc_copy, component, robot.cell, cv::Scalar(2), nullptr, cv::Scalar(0), cv::Scalar(0),
                 4 | cv::FLOODFILL_MASK_ONLY | (1 << 8));
   component = component(cv::Rect(1, 1, accessible.cols, accessible.rows));
+  std::vector<cv::Point> unreached;  // shrinks as coverage landmarks reach cells
+  for (int r = 0; r < accessible.rows; ++r)
+    for (int c = 0; c < accessible.cols; ++c)
+      if (component.at<uint8_t>(r, c) && !std::isfinite(cm.cost.at<float>(r, c))) unreached.emplace_back(c, r);
   while (cm.coverage_landmarks < max_coverage_landmarks) {
     cv::Point best(-1, -1);
     float best_cost = std::numeric_limits<float>::infinity();
-    for (int r = 0; r < accessible.rows; ++r)
-      for (int c = 0; c < accessible.cols; ++c) {
-        if (!component.at<uint8_t>(r, c) || std::isfinite(cm.cost.at<float>(r, c))) continue;
-        for (const cv::Point& d : k4) {  // a reached 4-neighbour of an unreached component cell
-          const cv::Point q(c + d.x, r + d.y);
-          if (inside(accessible, q) && cm.cost.at<float>(q) < best_cost) {
-            best_cost = cm.cost.at<float>(q);
-            best = q;
-          }
+    size_t kept = 0;
+    for (const cv::Point& p : unreached) {
+      if (std::isfinite(cm.cost.at<float>(p))) continue;
+      unreached[kept++] = p;
+      for (const cv::Point& d : k4) {  // a reached 4-neighbour of an unreached component cell
+        const cv::Point q = p + d;
+        if (inside(accessible, q) && cm.cost.at<float>(q) < best_cost) {
+          best_cost = cm.cost.at<float>(q);
+          best = q;
         }
       }
+    }
+    unreached.resize(kept);
     if (best.x < 0) break;
     const int idx = static_cast<int>(cm.nodes.size());
     cm.nodes.emplace_back(best, Landmark::kCoverage);
