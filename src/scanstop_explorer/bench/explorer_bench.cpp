@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
 
   // The grid the planner sees: exactly the 20 x 20 m world (no extra margin).
   ExplorerConfig cfg;
-  cfg.floor.margin_m = 0.0;
+  cfg.floor.grid_margin_m = 0.0;
   const Eigen::Vector2d lo(0.0, 0.0), hi(19.95, 19.95);
   PlanResult last;
   auto timeStep = [&](const char* title, const std::vector<std::pair<Pose2D, std::vector<Eigen::Vector3f>>>& set,

@@ -32,32 +32,33 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "map_dir", n.map_dir);
   optional(pnh, "run_dir", n.run_dir);
   optional(pnh, "image_scale", n.image_scale);
-  optional(pnh, "resolution", c.floor.resolution_m);
-  optional(pnh, "floor_layer", c.floor.floor_layer_m);
-  optional(pnh, "robot_height", c.floor.robot_height_m);
-  optional(pnh, "grid_margin", c.floor.margin_m);
+  // ROS parameter names are the config fields' names (so a ConfigError names the parameter).
+  optional(pnh, "resolution_m", c.floor.resolution_m);
+  optional(pnh, "floor_layer_m", c.floor.floor_layer_m);
+  optional(pnh, "robot_height_m", c.floor.robot_height_m);
+  optional(pnh, "grid_margin_m", c.floor.grid_margin_m);
   optional(pnh, "min_floor_points", c.floor.min_floor_points);
   optional(pnh, "min_obstacle_points", c.floor.min_obstacle_points);
-  optional(pnh, "floor_fill_radius", c.floor.fill_radius_m);
-  optional(pnh, "robot_radius", c.planner.robot_radius_m);
-  optional(pnh, "d_max", c.planner.d_max_m);
-  optional(pnh, "k_r", c.planner.k_r_m);
+  optional(pnh, "floor_fill_radius_m", c.floor.floor_fill_radius_m);
+  optional(pnh, "robot_radius_m", c.planner.robot_radius_m);
+  optional(pnh, "d_max_m", c.planner.d_max_m);
+  optional(pnh, "k_r_m", c.planner.k_r_m);
   optional(pnh, "k0", c.planner.k0);
   optional(pnh, "c0", c.planner.c0);
   optional(pnh, "knowledge_threshold", c.planner.knowledge_threshold);
-  optional(pnh, "frontier_distance", c.planner.frontier_distance_m);
-  optional(pnh, "start_snap", c.planner.start_snap_m);
+  optional(pnh, "frontier_distance_m", c.planner.frontier_distance_m);
+  optional(pnh, "start_snap_m", c.planner.start_snap_m);
   optional(pnh, "max_coverage_landmarks", c.planner.max_coverage_landmarks);
-  optional(pnh, "known_free_radius", c.known_free_radius_m);
-  optional(pnh, "self_filter_radius", c.self_filter_radius_m);
-  optional(pnh, "target_tolerance", c.target_tolerance_m);
-  optional(pnh, "progress", c.progress_m);
+  optional(pnh, "known_free_radius_m", c.known_free_radius_m);
+  optional(pnh, "self_filter_radius_m", c.self_filter_radius_m);
+  optional(pnh, "target_tolerance_m", c.target_tolerance_m);
+  optional(pnh, "progress_m", c.progress_m);
   optional(pnh, "max_failed_attempts", c.max_failed_attempts);
-  optional(pnh, "blacklist_radius", c.blacklist_radius_m);
+  optional(pnh, "blacklist_radius_m", c.blacklist_radius_m);
   try {
     c.validate();
   } catch (const ConfigError& e) {
-    throw ConfigError(std::string("parameter in ") + pnh.getNamespace() + ": " + e.what());
+    throw ConfigError("parameter in namespace " + pnh.getNamespace() + ": " + e.what());
   }
   requireInRange(pnh.resolveName("image_scale"), n.image_scale, 1, 16);
   if (n.frame_id.empty()) throw ConfigError("parameter '" + pnh.resolveName("frame_id") + "' must not be empty");

@@ -19,11 +19,11 @@ void FloorConfig::validate() const {
   requireInRange("resolution_m", resolution_m, 0.005, 1.0, "m");
   requireInRange("floor_layer_m", floor_layer_m, 1e-6, 0.5, "m");
   requireInRange("robot_height_m", robot_height_m, 1e-6, 5.0, "m");
-  requireInRange("margin_m", margin_m, 0.0, 20.0, "m");
+  requireInRange("grid_margin_m", grid_margin_m, 0.0, 20.0, "m");
   requireInRange("min_floor_points", min_floor_points, 1, 1000);
   requireInRange("min_obstacle_points", min_obstacle_points, 1, 1000);
   requireInRange("max_extent_m", max_extent_m, 1e-3, 1e4, "m");
-  requireInRange("fill_radius_m", fill_radius_m, 0.0, 1.0, "m");
+  requireInRange("floor_fill_radius_m", floor_fill_radius_m, 0.0, 1.0, "m");
 }
 
 FloorMap::FloorMap(const FloorConfig& config) : config_(config) {
@@ -38,8 +38,8 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
     if (lo.x() >= geometry_.origin_x && lo.y() >= geometry_.origin_y && hi.x() < x1 && hi.y() < y1) return;
   }
   // New bounds on the global lattice (multiples of the resolution), so cells never shift.
-  Eigen::Vector2d new_lo = lo.array() - config_.margin_m;
-  Eigen::Vector2d new_hi = hi.array() + config_.margin_m;
+  Eigen::Vector2d new_lo = lo.array() - config_.grid_margin_m;
+  Eigen::Vector2d new_hi = hi.array() + config_.grid_margin_m;
   if (!empty()) {
     new_lo = new_lo.cwiseMin(Eigen::Vector2d(geometry_.origin_x, geometry_.origin_y));
     new_hi = new_hi.cwiseMax(Eigen::Vector2d(geometry_.origin_x + geometry_.width * res,
@@ -139,7 +139,7 @@ cv::Mat FloorMap::states() const {
       }
   }
   s.setTo(kFloor, add);
-  fillFloorGaps(s, config_.fill_radius_m / config_.resolution_m);
+  fillFloorGaps(s, config_.floor_fill_radius_m / config_.resolution_m);
   return s;
 }
 

@@ -12,7 +12,9 @@
 
 #include "scenes.h"
 #include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/error.h"
 #include "scanstop_explorer/distance_transform.h"
+#include "scanstop_explorer/explorer_ros.h"
 
 using namespace scanstop;
 using namespace scanstop::explorer;
@@ -149,6 +151,33 @@ TEST(ExplorerNode, PlansCollisionFreePathsFromRegisteredScans) {
   ASSERT_TRUE(client.call(srv));
   EXPECT_FALSE(srv.response.success);
   EXPECT_NE(srv.response.message.find("odom"), std::string::npos);
+}
+
+namespace {
+std::string configErrorOf(const std::string& ns) {
+  try {
+    ExplorerNode node{ros::NodeHandle(), ros::NodeHandle(ns)};
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(ExplorerNode, BadParametersStopTheNodeNamingThem) {
+  ros::param::set("/bad_range/d_max_m", -1.0);
+  const std::string range = configErrorOf("/bad_range");
+  EXPECT_NE(range.find("d_max_m"), std::string::npos) << range;
+  EXPECT_NE(range.find("-1"), std::string::npos) << range;
+  ros::param::set("/bad_type/k_r_m", std::string("far"));
+  const std::string type = configErrorOf("/bad_type");
+  EXPECT_NE(type.find("k_r_m"), std::string::npos) << type;
+  EXPECT_NE(type.find("wrong type"), std::string::npos) << type;
+  ros::param::set("/bad_scale/image_scale", 99);
+  const std::string scale = configErrorOf("/bad_scale");
+  EXPECT_NE(scale.find("image_scale"), std::string::npos) << scale;
+  ros::param::set("/good/robot_radius_m", 0.25);
+  EXPECT_EQ(configErrorOf("/good"), "");
 }
 
 int main(int argc, char** argv) {

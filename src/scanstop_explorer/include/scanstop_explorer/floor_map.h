@@ -29,13 +29,13 @@ struct FloorConfig {
   double resolution_m = 0.05;     ///< grid cell edge [m], (0.005, 1]
   double floor_layer_m = 0.06;    ///< d_floor: thickness of the floor layer centred on z = 0 [m], (0, 0.5]
   double robot_height_m = 0.6;    ///< d_robot: thickness of the obstacle layer above the floor layer [m], (0, 5]
-  double margin_m = 1.0;          ///< unknown margin kept around the data when the grid grows [m], [0, 20]
+  double grid_margin_m = 1.0;          ///< unknown margin kept around the data when the grid grows [m], [0, 20]
   int min_floor_points = 1;       ///< floor points a cell needs to count as floor, [1, 1000]
   int min_obstacle_points = 2;    ///< obstacle-layer points ONE scan must put into a cell to make it an
                                   ///< obstacle (real obstacles give many per scan, random outlier
                                   ///< ranges rarely two in one cell), [1, 1000]
   double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
-  double fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
+  double floor_fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
                                   ///< (morphological closing of the floor over unknown cells only;
                                   ///< 0 = off, the thesis' plain extraction) [m], [0, 1]
 
@@ -50,7 +50,7 @@ class FloorMap {
 
   /// Adds the points of one scan in the map frame (z = 0 is the floor) [m]. Non-finite points
   /// and points outside both layers are skipped; the grid grows to hold every used point plus
-  /// margin_m. Returns the number of points that marked floor or obstacle.
+  /// grid_margin_m. Returns the number of points that marked floor or obstacle.
   size_t addPoints(const std::vector<Eigen::Vector3f>& points_map);
   /// Marks the disc of radius_m around a map point as known free floor (where the robot stood;
   /// the scanner cannot see the floor under the robot): unknown cells of the disc that the centre
