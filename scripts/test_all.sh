@@ -7,6 +7,9 @@ set -uo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 export PATH=/usr/bin:$PATH
+# Tests talk over loopback only and do not depend on the machine's host name resolving.
+export ROS_IP=127.0.0.1 ROS_MASTER_URI=http://127.0.0.1:11311
+unset ROS_HOSTNAME
 t0=$(date +%s)
 results="$root/build/test_results"
 pipeline="$results/_pipeline"
