@@ -1,0 +1,86 @@
+#pragma once
+/// A static STL world for the simulator: an Embree BVH for ray casting and a 2D obstacle map (the
+/// world's geometry in the robot's height band) for collision checks of the robot disc.
+///
+/// Units: metres; z up; the floor lies in the z = 0 plane (thesis 6.1).
+
+#include <embree3/rtcore.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scanstop_common/cloud.h"
+
+namespace scanstop {
+namespace sim {
+
+/// How a world is checked and which geometry blocks the robot.
+struct WorldOptions {
+  bool require_floor = true;          ///< a world without floor triangles near z = 0 is an error
+  double floor_tolerance_m = 0.01;    ///< |z| below which a horizontal triangle counts as floor
+  double obstacle_min_z_m = 0.03;     ///< geometry above this height blocks the robot (thresholds, carpets below) [m]
+  double obstacle_max_z_m = 0.60;     ///< ... and below this height (the robot's height) [m]
+};
+
+/// A convex 2D polygon of the obstacle map (a triangle's part in the robot's height band, seen
+/// from above; degenerate for walls) [m].
+using Polygon2D = std::vector<Eigen::Vector2d>;
+
+class World {
+ public:
+  /// Loads and validates an STL world; throws IoError naming the file and the problem (missing,
+  /// malformed, empty, no floor).
+  static World load(const std::string& path, const WorldOptions& options = WorldOptions());
+  /// Builds a world from a mesh in memory (`name` for messages); same checks as load().
+  static World fromMesh(const TriangleMesh& mesh, const std::string& name, const WorldOptions& options = WorldOptions());
+
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
+  ~World();
+
+  /// Distance [m] along the unit direction to the first surface, or +inf when nothing is hit
+  /// within max_range.
+  double castRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float max_range) const;
+  /// Casts many rays (parallel); ranges[i] = +inf for a miss.
+  void castRays(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen::Vector3f>& directions,
+                float max_range, std::vector<float>& ranges) const;
+
+  /// True when a disc of `radius` centred at p touches an obstacle of the 2D obstacle map.
+  bool discCollides(const Eigen::Vector2d& p, double radius) const;
+  /// Smallest distance from p to an obstacle [m] (0 inside one, +inf when there are none).
+  double clearance(const Eigen::Vector2d& p) const;
+
+  const TriangleMesh& mesh() const { return mesh_; }
+  const std::string& name() const { return name_; }
+  Eigen::Vector3f minCorner() const { return min_; }
+  Eigen::Vector3f maxCorner() const { return max_; }
+  size_t floorTriangles() const { return floor_triangles_; }
+  const std::vector<Polygon2D>& obstacles() const { return polygons_; }
+  /// The Embree scene (for the benchmark's bare loop).
+  RTCScene scene() const;
+
+ private:
+  World();
+  void buildObstacleMap(const WorldOptions& options);
+  std::vector<int> cellsNear(const Eigen::Vector2d& p, double radius) const;
+
+  struct Embree;
+  std::unique_ptr<Embree> embree_;
+  TriangleMesh mesh_;
+  std::string name_;
+  Eigen::Vector3f min_, max_;
+  size_t floor_triangles_ = 0;
+  double distanceTo(const Polygon2D& poly, const Eigen::Vector2d& p) const;
+
+  // Obstacle map: convex polygons in a uniform grid of cells.
+  std::vector<Polygon2D> polygons_;
+  double cell_m_ = 0.5;
+  Eigen::Vector2d grid_origin_;
+  int grid_w_ = 0, grid_h_ = 0;
+  std::vector<std::vector<int>> grid_;
+};
+
+}  // namespace sim
+}  // namespace scanstop

@@ -1,0 +1,129 @@
+#include "scanstop_sim/models.h"
+
+#include <cmath>
+#include <limits>
+
+#include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
+
+namespace scanstop {
+namespace sim {
+
+Eigen::Vector3f ScannerConfig::direction(int plane, int planes, int beam) const {
+  const double phi = M_PI * plane / planes;  // plane turn about z
+  const double theta = (first_step + beam - front_step) * 2.0 * M_PI / steps_per_turn;  // from +z
+  const double h = std::sin(theta);
+  return Eigen::Vector3f(static_cast<float>(h * std::cos(phi)), static_cast<float>(h * std::sin(phi)),
+                         static_cast<float>(std::cos(theta)));
+}
+
+Eigen::Vector3f ScannerConfig::origin(int plane, int planes) const {
+  const double phi = M_PI * plane / planes;
+  return Eigen::Vector3f(static_cast<float>(x_offset_m + mount_offset_m * std::cos(phi)),
+                         static_cast<float>(mount_offset_m * std::sin(phi)), static_cast<float>(height_m));
+}
+
+void ScannerConfig::validate() const {
+  requireInRange("scanner_height", height_m, 0.05, 3.0, "m");
+  requireInRange("scanner_x_offset", x_offset_m, -1.0, 1.0, "m");
+  requireInRange("mount_offset", mount_offset_m, -0.5, 0.5, "m");
+  requireInRange("min_range", min_range_m, 0.0, 1.0, "m");
+  requireInRange("max_range", max_range_m, min_range_m + 0.01, 100.0, "m");
+  if (first_step < 0 || last_step <= first_step || last_step >= steps_per_turn)
+    throw ConfigError("scanner steps: need 0 <= first_step < last_step < steps_per_turn");
+}
+
+void SensorNoiseConfig::validate() const {
+  requireNonNegative("p_hit", p_hit);
+  requireNonNegative("p_random", p_random);
+  requireNonNegative("p_max", p_max);
+  if (p_hit + p_random + p_max <= 0.0) throw ConfigError("p_hit + p_random + p_max must be > 0");
+  requireInRange("sigma_near", sigma_near_m, 0.0, 1.0, "m");
+  requireInRange("sigma_far_rel", sigma_far_rel, 0.0, 1.0);
+  requireInRange("p_plane_loss", p_plane_loss, 0.0, 1.0);
+}
+
+void MotionConfig::validate() const {
+  requireInRange("curvature", curvature_per_m, -1.0, 1.0, "1/m");
+  requireInRange("curvature_sigma", curvature_sigma_per_m, 0.0, 1.0, "1/m");
+  requireInRange("distance_error_rel", distance_error_rel, -0.5, 0.5);
+  requireInRange("distance_sigma_rel", distance_sigma_rel, 0.0, 0.5);
+  requireInRange("finish_angle", finish_angle_rad, -0.5, 0.5, "rad");
+  requireInRange("finish_angle_sigma", finish_angle_sigma_rad, 0.0, 0.5, "rad");
+  requireInRange("rotation_error_rel", rotation_error_rel, -0.5, 0.5);
+  requireInRange("rotation_sigma_rel", rotation_sigma_rel, 0.0, 0.5);
+  requireInRange("rotation_position_sigma", rotation_position_sigma_m_per_rad, 0.0, 1.0, "m/rad");
+  requireInRange("linear_speed", linear_speed_mps, 0.01, 5.0, "m/s");
+  requireInRange("angular_speed", angular_speed_radps, 0.01, 10.0, "rad/s");
+}
+
+ErrorProfile makeProfile(const std::string& name) {
+  ErrorProfile p;
+  if (name == "perfect") return p;
+  if (name != "thesis") throw ConfigError("error profile '" + name + "' must be one of perfect, thesis");
+  // Sensor: the URG-04LX specification (10 mm up to 1 m, 1 % beyond), occasional random and
+  // max-range readings, and whole planes lost in transmission as on the real platform.
+  p.sensor.p_hit = 0.97;
+  p.sensor.p_random = 0.01;
+  p.sensor.p_max = 0.02;
+  p.sensor.sigma_near_m = 0.01;
+  p.sensor.sigma_far_rel = 0.01;
+  p.sensor.p_plane_loss = 0.02;
+  // Motion: slightly different wheel radii (curvature), a 3 % odometry scale error, a small turn at
+  // the end of every straight motion, 2 % rotation error and some drift while turning.
+  p.motion.curvature_per_m = 0.01;
+  p.motion.curvature_sigma_per_m = 0.005;
+  p.motion.distance_error_rel = 0.03;
+  p.motion.distance_sigma_rel = 0.01;
+  p.motion.finish_angle_rad = 0.5 * M_PI / 180.0;
+  p.motion.finish_angle_sigma_rad = 0.3 * M_PI / 180.0;
+  p.motion.rotation_error_rel = 0.02;
+  p.motion.rotation_sigma_rel = 0.01;
+  p.motion.rotation_position_sigma_m_per_rad = 0.01;
+  return p;
+}
+
+Pose2D ForwardSample::along(double s) const {
+  const double k = curvature_per_m;
+  if (std::abs(k) < 1e-9) return Pose2D(s, 0.0, 0.0);
+  return Pose2D(std::sin(k * s) / k, (1.0 - std::cos(k * s)) / k, k * s);
+}
+
+ForwardSample sampleForward(const MotionConfig& m, double distance_m, std::mt19937_64& rng) {
+  std::normal_distribution<double> n01(0.0, 1.0);
+  ForwardSample f;
+  const double sign = distance_m < 0 ? -1.0 : 1.0;
+  f.curvature_per_m = sign * (m.curvature_per_m + m.curvature_sigma_per_m * n01(rng));
+  f.true_length_m = distance_m * (1.0 + m.distance_error_rel + m.distance_sigma_rel * n01(rng));
+  f.finish_angle_rad = m.finish_angle_rad + m.finish_angle_sigma_rad * n01(rng);
+  return f;
+}
+
+Pose2D sampleRotation(const MotionConfig& m, double angle_rad, std::mt19937_64& rng) {
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const double turned = angle_rad * (1.0 + m.rotation_error_rel + m.rotation_sigma_rel * n01(rng));
+  const double sigma = m.rotation_position_sigma_m_per_rad * std::abs(angle_rad);
+  return Pose2D(sigma * n01(rng), sigma * n01(rng), turned);
+}
+
+float sampleRange(const SensorNoiseConfig& noise, const ScannerConfig& scanner, float true_range_m,
+                  std::mt19937_64& rng) {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  const double total = noise.p_hit + noise.p_random + noise.p_max;
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const double pick = u01(rng) * total;
+  if (pick >= noise.p_hit + noise.p_random) return kNaN;  // max-range reading: the URG reports no return
+  if (pick >= noise.p_hit) {
+    return static_cast<float>(scanner.min_range_m + u01(rng) * (scanner.max_range_m - scanner.min_range_m));
+  }
+  if (!std::isfinite(true_range_m) || true_range_m > scanner.max_range_m || true_range_m < scanner.min_range_m)
+    return kNaN;
+  const double sigma = true_range_m <= 1.0 ? noise.sigma_near_m : noise.sigma_far_rel * true_range_m;
+  if (sigma <= 0.0) return true_range_m;
+  std::normal_distribution<double> n(0.0, sigma);
+  const double r = true_range_m + n(rng);
+  return (r < scanner.min_range_m || r > scanner.max_range_m) ? kNaN : static_cast<float>(r);
+}
+
+}  // namespace sim
+}  // namespace scanstop

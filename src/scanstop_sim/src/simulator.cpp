@@ -1,0 +1,138 @@
+#include "scanstop_sim/simulator.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "scanstop_common/config.h"
+
+namespace scanstop {
+namespace sim {
+
+void SimConfig::validate() const {
+  scanner.validate();
+  errors.sensor.validate();
+  errors.motion.validate();
+  requireInRange("robot_radius", robot_radius_m, 0.05, 2.0, "m");
+  requireInRange("collision_step", collision_step_m, 0.0005, 0.1, "m");
+  requireInRange("max_forward", max_forward_m, 0.1, 100.0, "m");
+}
+
+Simulator::Simulator(World world, SimConfig config, const Pose2D& start_in_world)
+    : world_(std::move(world)), config_(std::move(config)) {
+  config_.validate();
+  reset(start_in_world, static_cast<int64_t>(config_.seed));
+}
+
+void Simulator::reset(const Pose2D& start_in_world, int64_t seed) {
+  if (!start_in_world.isFinite()) throw std::invalid_argument("the start pose must be finite");
+  if (world_.discCollides(Eigen::Vector2d(start_in_world.x, start_in_world.y), config_.robot_radius_m))
+    throw std::invalid_argument("start pose " + start_in_world.toString() + " puts the robot (radius " +
+                                std::to_string(config_.robot_radius_m) + " m) into an obstacle of " + world_.name());
+  start_ = start_in_world;
+  true_world_ = start_in_world;
+  odom_ = Pose2D();
+  if (seed >= 0) {
+    config_.seed = static_cast<uint64_t>(seed);
+    rng_.seed(config_.seed);
+    scan_counter_ = 0;
+  }
+}
+
+ScanOutput Simulator::scan(int planes) {
+  if (planes < 1 || planes > 2000) throw std::invalid_argument("planes must be in [1, 2000], got " + std::to_string(planes));
+  const ScannerConfig& sc = config_.scanner;
+  const int beams = sc.beams();
+  ScanOutput out;
+  out.raw_points = static_cast<uint32_t>(planes * beams);
+  PointCloud& cloud = out.cloud;
+  cloud.width = static_cast<uint32_t>(beams);
+  cloud.height = static_cast<uint32_t>(planes);
+  cloud.points.assign(static_cast<size_t>(planes) * beams, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  cloud.ranges.assign(cloud.points.size(), std::numeric_limits<float>::quiet_NaN());
+
+  // Which planes are lost in transmission (drawn up front so the result does not depend on threads).
+  std::vector<uint8_t> lost(planes, 0);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  for (int p = 0; p < planes; ++p) lost[p] = u01(rng_) < config_.errors.sensor.p_plane_loss ? 1 : 0;
+  const uint64_t scan_seed = rng_();
+  ++scan_counter_;
+
+  const Eigen::Isometry3f T_world_base = true_world_.toIsometry3f();
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int p = 0; p < planes; ++p) {
+    if (lost[p]) continue;
+    std::mt19937_64 rng(scan_seed ^ (0x9E3779B97F4A7C15ull * static_cast<uint64_t>(p + 1)));
+    const Eigen::Vector3f o_base = sc.origin(p, planes);
+    const Eigen::Vector3f o_world = T_world_base * o_base;
+    for (int b = 0; b < beams; ++b) {
+      const Eigen::Vector3f d_base = sc.direction(p, planes, b);
+      const Eigen::Vector3f d_world = T_world_base.linear() * d_base;
+      const double hit = world_.castRay(o_world, d_world, static_cast<float>(sc.max_range_m * 1.05));
+      const float r = sampleRange(config_.errors.sensor, sc, static_cast<float>(hit), rng);
+      if (!std::isfinite(r)) continue;
+      const size_t i = static_cast<size_t>(p) * beams + b;
+      cloud.ranges[i] = r;
+      cloud.points[i] = o_base + r * d_base;
+    }
+  }
+  for (int p = 0; p < planes; ++p) out.planes_dropped += lost[p];
+  if (config_.outlier_filter) out.outliers_removed = static_cast<uint32_t>(filterOutliers(cloud));
+  out.valid_points = static_cast<uint32_t>(cloud.countFinite());
+  out.duration_s = planes * sc.plane_time_s;
+  clock_s_ += out.duration_s;
+  return out;
+}
+
+MotionOutput Simulator::forward(double distance_m) {
+  if (!std::isfinite(distance_m) || std::abs(distance_m) > config_.max_forward_m)
+    throw std::invalid_argument("forward distance " + std::to_string(distance_m) + " m is outside [-" +
+                                std::to_string(config_.max_forward_m) + ", " + std::to_string(config_.max_forward_m) + "] m");
+  MotionOutput out;
+  const ForwardSample f = sampleForward(config_.errors.motion, distance_m, rng_);
+  const double length = std::abs(f.true_length_m);
+  const double sign = f.true_length_m < 0 ? -1.0 : 1.0;
+  const Pose2D before = true_world_;
+  double travelled = length;
+  for (double s = config_.collision_step_m; s < length + config_.collision_step_m; s += config_.collision_step_m) {
+    const double t = std::min(s, length);
+    const Pose2D p = before * f.along(sign * t);
+    if (world_.discCollides(Eigen::Vector2d(p.x, p.y), config_.robot_radius_m)) {
+      travelled = std::max(0.0, t - config_.collision_step_m);  // the last pose without contact
+      out.collision = true;
+      break;
+    }
+  }
+  true_world_ = before * f.along(sign * travelled);
+  if (!out.collision) true_world_ = true_world_ * Pose2D(0, 0, f.finish_angle_rad);
+  // Odometry believes the robot drove straight; it measures the commanded distance scaled by how
+  // much of the true path was driven.
+  const double fraction = length > 0 ? travelled / length : 1.0;
+  out.achieved = distance_m * fraction;
+  odom_ = odom_ * Pose2D(out.achieved, 0.0, 0.0);
+  out.duration_s = std::abs(out.achieved) / config_.errors.motion.linear_speed_mps;
+  clock_s_ += out.duration_s;
+  return out;
+}
+
+MotionOutput Simulator::rotate(double angle_rad) {
+  if (!std::isfinite(angle_rad) || std::abs(angle_rad) > 4.0 * M_PI)
+    throw std::invalid_argument("rotation " + std::to_string(angle_rad) + " rad is outside [-4 pi, 4 pi]");
+  MotionOutput out;
+  const Pose2D delta = sampleRotation(config_.errors.motion, angle_rad, rng_);
+  const Pose2D next = true_world_ * delta;
+  if (world_.discCollides(Eigen::Vector2d(next.x, next.y), config_.robot_radius_m)) {
+    // The drift while turning would push the robot into an obstacle: it turns in place instead.
+    true_world_ = true_world_ * Pose2D(0, 0, delta.yaw);
+  } else {
+    true_world_ = next;
+  }
+  out.achieved = angle_rad;
+  odom_ = odom_ * Pose2D(0.0, 0.0, angle_rad);
+  out.duration_s = std::abs(angle_rad) / config_.errors.motion.angular_speed_radps;
+  clock_s_ += out.duration_s;
+  return out;
+}
+
+}  // namespace sim
+}  // namespace scanstop

@@ -1,0 +1,304 @@
+// Unit tests of the simulator core: ray casting against analytic distances, the scanner geometry in
+// an analytic box room, the sensor and motion error models' statistics, collisions, world checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/shared_data.h"
+#include "scanstop_common/stl_io.h"
+#include "scanstop_sim/simulator.h"
+#include "scanstop_sim/world_builder.h"
+
+namespace scanstop {
+namespace sim {
+namespace {
+
+/// A closed box room [x0, x1] x [y0, y1] x [0, h] (its bottom is the floor) plus extra boxes.
+TriangleMesh boxRoom(double x0, double y0, double x1, double y1, double h) {
+  WorldBuilder b(h);
+  b.floorAndCeiling(x0, y0, x1, y1);
+  // Thin walls exactly on the room's faces (inner faces at the bounds).
+  b.box({x0 - 0.1, y0, 0}, {x0, y1, h});
+  b.box({x1, y0, 0}, {x1 + 0.1, y1, h});
+  b.box({x0 - 0.1, y0 - 0.1, 0}, {x1 + 0.1, y0, h});
+  b.box({x0 - 0.1, y1, 0}, {x1 + 0.1, y1 + 0.1, h});
+  return b.mesh();
+}
+
+/// Analytic distance from o along unit d to the inside of the box [lo, hi].
+double insideBoxDistance(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
+                         const Eigen::Vector3d& hi) {
+  double t = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] > 1e-12) t = std::min(t, (hi[k] - o[k]) / d[k]);
+    if (d[k] < -1e-12) t = std::min(t, (lo[k] - o[k]) / d[k]);
+  }
+  return t;
+}
+
+TEST(World, RayHitsMatchAnalyticDistances) {
+  WorldBuilder b(2.0);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  b.box({1.0, -1.0, 0.0}, {2.0, 1.0, 1.0});
+  const World w = World::fromMesh(b.mesh(), "box");
+  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {1, 0, 0}, 10.0f), 1.0, 1e-6);
+  const Eigen::Vector3f diag = Eigen::Vector3f(1, 0.5f, 0).normalized();
+  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, diag, 10.0f), std::sqrt(1.25), 1e-6);  // x = 1 at y = 0.5
+  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {0, 0, -1}, 10.0f), 0.5, 1e-6);         // the floor
+  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {0, 0, 1}, 10.0f), 1.5, 1e-6);          // the ceiling
+  EXPECT_TRUE(std::isinf(w.castRay({0, 0, 0.5f}, {1, 0, 0}, 0.9f)));          // beyond max range
+  // A single triangle: the hit lies at the analytic plane distance.
+  TriangleMesh tri;
+  tri.vertices = {{3, -1, 0}, {3, 1, 0}, {3, 0, 2}, {-9, -9, 0}, {9, -9, 0}, {9, 9, 0}};
+  tri.faces = {{0, 1, 2}, {3, 4, 5}};
+  const World t = World::fromMesh(tri, "tri");
+  EXPECT_NEAR(t.castRay({0, 0, 0.5f}, {1, 0, 0}, 10.0f), 3.0, 1e-6);
+  EXPECT_TRUE(std::isinf(t.castRay({0, 0.5f, 1.9f}, {1, 0, 0}, 10.0f)));  // passes beside the apex
+}
+
+TEST(Simulator, PerfectScanInABoxRoomMatchesAnalyticRanges) {
+  const Eigen::Vector3d lo(-2.0, -1.5, 0.0), hi(3.0, 2.5, 2.5);
+  SimConfig config;
+  config.outlier_filter = false;
+  const Pose2D start(0.4, 0.3, 0.7);
+  Simulator sim(World::fromMesh(boxRoom(lo.x(), lo.y(), hi.x(), hi.y(), hi.z()), "box room"), config, start);
+  const ScanOutput scan = sim.scan(50);
+  ASSERT_EQ(scan.cloud.height, 50u);
+  ASSERT_EQ(scan.cloud.width, 682u);
+  EXPECT_EQ(scan.raw_points, 50u * 682u);
+  EXPECT_EQ(scan.planes_dropped, 0u);
+  const Eigen::Isometry3d T = start.toIsometry3d();
+  size_t checked = 0;
+  for (int p = 0; p < 50; ++p) {
+    for (int b = 0; b < 682; ++b) {
+      const size_t i = static_cast<size_t>(p) * 682 + b;
+      const Eigen::Vector3d o = T * config.scanner.origin(p, 50).cast<double>();
+      const Eigen::Vector3d d = T.linear() * config.scanner.direction(p, 50, b).cast<double>();
+      const double expected = insideBoxDistance(o, d, lo, hi);
+      if (expected > config.scanner.max_range_m) {
+        EXPECT_TRUE(std::isnan(scan.cloud.ranges[i]));
+        continue;
+      }
+      ASSERT_TRUE(std::isfinite(scan.cloud.ranges[i])) << "plane " << p << " beam " << b;
+      EXPECT_NEAR(scan.cloud.ranges[i], expected, 1e-4) << "plane " << p << " beam " << b;
+      // The point lies at range along the beam, in base_link.
+      const Eigen::Vector3d pt = config.scanner.origin(p, 50).cast<double>() +
+                                 expected * config.scanner.direction(p, 50, b).cast<double>();
+      EXPECT_LT((scan.cloud.points[i].cast<double>() - pt).norm(), 2e-4);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 30000u);
+  // No point below the robot: the blind cone under the scanner (half-angle 60 deg).
+  for (const auto& pt : scan.cloud.points)
+    if (pt.allFinite() && pt.z() < 0.01f) {
+      EXPECT_GT(std::hypot(pt.x(), pt.y()), 0.45 * std::tan(M_PI / 3) - 0.01);
+    }
+}
+
+TEST(Scanner, GeometryFollowsTheUrgSteps) {
+  ScannerConfig s;
+  EXPECT_EQ(s.beams(), 682);
+  // Step 384 (front) points straight up; step 128 is -90 deg: horizontal, opposite the plane's heading.
+  EXPECT_TRUE(s.direction(0, 100, 384 - 44).isApprox(Eigen::Vector3f(0, 0, 1), 1e-6f));
+  const Eigen::Vector3f d = s.direction(0, 100, 128 - 44);
+  EXPECT_NEAR(d.x(), -1.0f, 1e-6f);
+  EXPECT_NEAR(d.z(), 0.0f, 1e-6f);
+  // Plane 50 of 100 is turned by 90 deg about z.
+  const Eigen::Vector3f e = s.direction(50, 100, 640 - 44);  // +90 deg in the plane
+  EXPECT_NEAR(e.y(), 1.0f, 1e-6f);
+  // The first and last beams are 30 deg below the horizon (the fan spans 239.77 deg).
+  EXPECT_NEAR(std::asin(s.direction(0, 100, 0).z()) * 180 / M_PI, -(725 - 384 - 256) * 360.0 / 1024 + 0.0, 0.5);
+}
+
+TEST(SensorModel, NoiseStatisticsFollowTheThesisSpecification) {
+  const ErrorProfile thesis = makeProfile("thesis");
+  SensorNoiseConfig hits = thesis.sensor;
+  hits.p_random = hits.p_max = 0.0;
+  ScannerConfig s;
+  std::mt19937_64 rng(42);
+  for (const auto& [r, sigma] : {std::pair<float, double>{0.5f, 0.01}, std::pair<float, double>{3.0f, 0.03}}) {
+    double sum = 0, sq = 0;
+    const int n = 50000;
+    for (int i = 0; i < n; ++i) {
+      const double v = sampleRange(hits, s, r, rng);
+      sum += v;
+      sq += v * v;
+    }
+    const double mean = sum / n, sd = std::sqrt(sq / n - mean * mean);
+    EXPECT_NEAR(mean, r, 4 * sigma / std::sqrt(n)) << "range " << r;
+    EXPECT_NEAR(sd, sigma, 0.03 * sigma) << "range " << r;
+  }
+  // Case frequencies: random and max-range readings at their relative probabilities.
+  int random = 0, invalid = 0;
+  const int n = 100000;
+  for (int i = 0; i < n; ++i) {
+    const float v = sampleRange(thesis.sensor, s, 2.0f, rng);
+    if (std::isnan(v)) ++invalid;
+    else if (std::abs(v - 2.0f) > 0.2f) ++random;
+  }
+  const double total = thesis.sensor.p_hit + thesis.sensor.p_random + thesis.sensor.p_max;
+  EXPECT_NEAR(invalid / double(n), thesis.sensor.p_max / total, 0.003);
+  // A random reading lands within 0.2 m of the truth 0.4 / 5.58 of the time.
+  EXPECT_NEAR(random / double(n), thesis.sensor.p_random / total * (1 - 0.4 / 5.58), 0.002);
+  // Nothing comes back beyond the maximum range.
+  EXPECT_TRUE(std::isnan(sampleRange(hits, s, 6.0f, rng)));
+}
+
+TEST(MotionModel, PerfectProfileIsExact) {
+  const ErrorProfile perfect = makeProfile("perfect");
+  std::mt19937_64 rng(1);
+  const ForwardSample f = sampleForward(perfect.motion, 2.0, rng);
+  const Pose2D end = f.along(f.true_length_m);
+  EXPECT_DOUBLE_EQ(end.x, 2.0);
+  EXPECT_DOUBLE_EQ(end.y, 0.0);
+  EXPECT_DOUBLE_EQ(f.finish_angle_rad, 0.0);
+  const Pose2D r = sampleRotation(perfect.motion, 1.0, rng);
+  EXPECT_DOUBLE_EQ(r.yaw, 1.0);
+  EXPECT_DOUBLE_EQ(r.x, 0.0);
+}
+
+TEST(MotionModel, ThesisProfileMeanAndSpread) {
+  const MotionConfig m = makeProfile("thesis").motion;
+  std::mt19937_64 rng(7);
+  const int n = 20000;
+  double len = 0, len2 = 0, lateral = 0, finish = 0, turn = 0, pos2 = 0;
+  for (int i = 0; i < n; ++i) {
+    const ForwardSample f = sampleForward(m, 1.0, rng);
+    len += f.true_length_m;
+    len2 += f.true_length_m * f.true_length_m;
+    lateral += f.along(f.true_length_m).y;
+    finish += f.finish_angle_rad;
+    const Pose2D r = sampleRotation(m, M_PI / 2, rng);
+    turn += r.yaw;
+    pos2 += r.x * r.x;
+  }
+  const double mean_len = len / n;
+  EXPECT_NEAR(mean_len, 1.0 + m.distance_error_rel, 0.001);
+  EXPECT_NEAR(std::sqrt(len2 / n - mean_len * mean_len), m.distance_sigma_rel, 0.001);
+  EXPECT_NEAR(lateral / n, m.curvature_per_m * 1.03 * 1.03 / 2, 0.0005);  // arc: y = k s^2 / 2
+  EXPECT_NEAR(finish / n, m.finish_angle_rad, 0.0002);
+  EXPECT_NEAR(turn / n, M_PI / 2 * (1 + m.rotation_error_rel), 0.001);
+  EXPECT_NEAR(std::sqrt(pos2 / n), m.rotation_position_sigma_m_per_rad * M_PI / 2, 0.0005);
+}
+
+TEST(Simulator, ForwardMotionStopsAtContactAndReportsTheCollision) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  b.box({2.0, -5, 0}, {2.1, 5, 2.5});  // a wall at x = 2
+  SimConfig config;
+  Simulator sim(World::fromMesh(b.mesh(), "wall"), config, Pose2D(0, 0, 0));
+  const MotionOutput out = sim.forward(3.0);
+  EXPECT_TRUE(out.collision);
+  const double contact = 2.0 - config.robot_radius_m;
+  EXPECT_LE(sim.trueInWorld().x, contact + 1e-9);
+  EXPECT_GT(sim.trueInWorld().x, contact - 2 * config.collision_step_m);
+  EXPECT_NEAR(out.achieved, sim.trueInWorld().x, 1e-9);  // perfect odometry: what it drove
+  EXPECT_NEAR(sim.odometry().x, out.achieved, 1e-9);
+  // Driving on does not pass through the wall.
+  const MotionOutput again = sim.forward(1.0);
+  EXPECT_TRUE(again.collision);
+  EXPECT_LE(sim.trueInWorld().x, contact + 1e-9);
+  // Backwards is free.
+  EXPECT_FALSE(sim.forward(-1.0).collision);
+  EXPECT_NEAR(sim.trueInWorld().x, contact - 1.0, 2 * config.collision_step_m);
+}
+
+TEST(Simulator, ThesisOdometryDriftsAwayFromTheTruth) {
+  SimConfig config;
+  config.errors = makeProfile("thesis");
+  const std::vector<WorldSpec> worlds = buildWorlds();
+  Simulator sim(World::fromMesh(worlds[0].mesh, "room"), config, worlds[0].start);
+  for (int i = 0; i < 4; ++i) {
+    sim.forward(1.5);
+    sim.rotate(M_PI / 2);
+  }
+  const Pose2D truth = sim.trueInMap(), odom = sim.odometry();
+  EXPECT_GT(std::hypot(truth.x - odom.x, truth.y - odom.y), 0.05);
+  EXPECT_LT(std::hypot(truth.x - odom.x, truth.y - odom.y), 1.0);
+  EXPECT_GT(sim.clock(), 4 * 1.5 / 0.2);
+}
+
+TEST(Simulator, PlanesAreLostAndCountedAndScansAreRepeatable) {
+  SimConfig config;
+  config.errors = makeProfile("thesis");
+  config.errors.sensor.p_plane_loss = 0.2;
+  const std::vector<WorldSpec> worlds = buildWorlds();
+  Simulator a(World::fromMesh(worlds[0].mesh, "room"), config, worlds[0].start);
+  const ScanOutput s = a.scan(100);
+  EXPECT_GT(s.planes_dropped, 5u);
+  EXPECT_LT(s.planes_dropped, 40u);
+  EXPECT_GT(s.outliers_removed, 0u);
+  EXPECT_EQ(s.valid_points, s.cloud.countFinite());
+  EXPECT_DOUBLE_EQ(s.duration_s, 10.0);
+  size_t empty_planes = 0;
+  for (int p = 0; p < 100; ++p) {
+    bool any = false;
+    for (int b = 0; b < 682; ++b) any = any || std::isfinite(s.cloud.ranges[p * 682 + b]);
+    empty_planes += any ? 0 : 1;
+  }
+  EXPECT_EQ(empty_planes, s.planes_dropped);
+  // Same seed, same scan.
+  Simulator b(World::fromMesh(worlds[0].mesh, "room"), config, worlds[0].start);
+  const ScanOutput t = b.scan(100);
+  for (size_t i = 0; i < s.cloud.size(); i += 97)
+    EXPECT_TRUE(std::isnan(s.cloud.ranges[i]) ? std::isnan(t.cloud.ranges[i]) : s.cloud.ranges[i] == t.cloud.ranges[i]);
+}
+
+TEST(World, MalformedWorldsGiveClearErrors) {
+  WorldBuilder b(2.0);
+  b.box({0, 0, 0.5}, {1, 1, 1.5});  // a floating box: no floor
+  try {
+    World::fromMesh(b.mesh(), "floating.stl");
+    FAIL() << "a world without floor must be refused";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("floating.stl"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("no floor"), std::string::npos);
+  }
+  WorldOptions allow;
+  allow.require_floor = false;
+  EXPECT_NO_THROW(World::fromMesh(b.mesh(), "floating.stl", allow));
+  EXPECT_THROW(World::load("/nonexistent/world.stl"), IoError);
+  EXPECT_THROW(World::fromMesh(TriangleMesh(), "empty.stl"), IoError);
+  // A start pose overlapping an obstacle (a pillar) is refused.
+  WorldBuilder c(2.0);
+  c.floorAndCeiling(-5, -5, 5, 5);
+  c.box({-0.15, -0.15, 0}, {0.15, 0.15, 2});
+  EXPECT_THROW(Simulator(World::fromMesh(c.mesh(), "c"), SimConfig(), Pose2D(0, 0, 0)), std::invalid_argument);
+}
+
+TEST(Worlds, CommittedWorldsEqualAFreshBuildAndTheirStartsAreFree) {
+  for (const WorldSpec& spec : buildWorlds()) {
+    const std::string path = std::string(SCANSTOP_WORLDS_DIR) + "/" + spec.name + ".stl";
+    const World w = World::load(path);  // the committed file loads and has a floor
+    EXPECT_GT(w.floorTriangles(), 0u) << spec.name;
+    EXPECT_FALSE(w.discCollides(Eigen::Vector2d(spec.start.x, spec.start.y), SimConfig().robot_radius_m)) << spec.name;
+    // Regenerate and compare the bytes (the generator is the source of the worlds).
+    char tmp[] = "/tmp/scanstop_world_XXXXXX";
+    const int fd = mkstemp(tmp);
+    ASSERT_GE(fd, 0);
+    close(fd);
+    writeStlBinary(tmp, spec.mesh);
+    EXPECT_EQ(readFile(tmp), readFile(path)) << spec.name << ": worlds/ is out of date; run make_worlds";
+    std::remove(tmp);
+  }
+}
+
+TEST(Worlds, RealHouseLoadsAndScans) {
+  SimConfig config;
+  config.errors = makeProfile("thesis");
+  Simulator sim(World::load(sharedDataPath("worlds/turtlebot3_house.stl")), config, defaultStartPose("turtlebot3_house"));
+  const ScanOutput s = sim.scan(50);
+  // The house has no ceiling: upward beams see nothing; walls, furniture and floor remain.
+  EXPECT_GT(s.valid_points, 50u * 682u / 4);
+  size_t floor_points = 0;
+  for (const auto& p : s.cloud.points) floor_points += (p.allFinite() && std::abs(p.z()) < 0.02f) ? 1 : 0;
+  EXPECT_GT(floor_points, 1000u);
+}
+
+}  // namespace
+}  // namespace sim
+}  // namespace scanstop
