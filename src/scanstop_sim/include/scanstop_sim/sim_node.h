@@ -1,0 +1,56 @@
+#pragma once
+/// sim_node wires the Simulator to ROS: scanner/take_scan, base/rotate, base/forward and sim/reset
+/// services (the same scanner/ and base/ services as the hardware drivers), odometry and tf
+/// (odom -> base_link, static world -> map and base_link -> laser), ground truth, the world as a
+/// marker and a modelled /clock.
+
+#include <ros/ros.h>
+#include <scanstop_msgs/Forward.h>
+#include <scanstop_msgs/ResetSim.h>
+#include <scanstop_msgs/Rotate.h>
+#include <scanstop_msgs/TakeScan.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "scanstop_sim/simulator.h"
+
+namespace scanstop {
+namespace sim {
+
+class SimNode {
+ public:
+  /// Reads and validates the parameters, loads the world; throws ConfigError / IoError naming the
+  /// parameter or file that is wrong.
+  SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+
+ private:
+  bool onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res);
+  bool onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res);
+  bool onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res);
+  bool onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::ResetSim::Response& res);
+  void onClockTimer(const ros::WallTimerEvent&);
+  /// Publishes /clock, odom, tf and ground truth for the current state.
+  void publishState();
+  void publishStaticTransforms();
+  void publishWorldMarker();
+  ros::Time now() const;
+
+  std::unique_ptr<Simulator> sim_;
+  std::mutex mutex_;
+  bool publish_clock_ = false;
+  double clock_start_s_ = 1.0;
+  std::string world_frame_ = "world", map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link",
+              laser_frame_ = "laser";
+  ros::ServiceServer take_scan_srv_, rotate_srv_, forward_srv_, reset_srv_;
+  ros::Publisher clock_pub_, odom_pub_, truth_pub_, scan_pub_, progress_pub_, marker_pub_;
+  tf2_ros::TransformBroadcaster tf_;
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+  ros::WallTimer clock_timer_;
+};
+
+}  // namespace sim
+}  // namespace scanstop

@@ -1,0 +1,269 @@
+#include "scanstop_sim/sim_node.h"
+
+#include <nav_msgs/Odometry.h>
+#include <rosgraph_msgs/Clock.h>
+#include <scanstop_msgs/Progress.h>
+#include <visualization_msgs/Marker.h>
+
+#include <cmath>
+
+#include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
+#include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/params.h"
+#include "scanstop_sim/world_builder.h"
+
+namespace scanstop {
+namespace sim {
+namespace {
+
+std::string baseName(const std::string& path) {
+  std::string name = path.substr(path.find_last_of('/') + 1);
+  const size_t dot = name.rfind('.');
+  return dot == std::string::npos ? name : name.substr(0, dot);
+}
+
+nav_msgs::Odometry odometryMsg(const Pose2D& pose, const std::string& frame, const std::string& child,
+                               const ros::Time& stamp) {
+  nav_msgs::Odometry msg;
+  msg.header.stamp = stamp;
+  msg.header.frame_id = frame;
+  msg.child_frame_id = child;
+  msg.pose.pose = ros_conv::toPoseMsg(pose);
+  return msg;
+}
+
+}  // namespace
+
+SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
+  const std::string world_path = ros_params::require<std::string>(pnh, "world");
+  WorldOptions world_options;
+  bool allow_no_floor = false;
+  ros_params::optional(pnh, "allow_no_floor", allow_no_floor);
+  world_options.require_floor = !allow_no_floor;
+
+  std::string profile = "thesis";
+  ros_params::optional(pnh, "error_profile", profile);
+  SimConfig config;
+  config.errors = makeProfile(profile);
+  int seed = 1;
+  ros_params::optional(pnh, "seed", seed);
+  if (seed < 0) throw ConfigError("parameter '" + pnh.resolveName("seed") + "' = " + std::to_string(seed) + " must be >= 0");
+  config.seed = static_cast<uint64_t>(seed);
+  // Every model field can be overridden by a parameter of the same name (config/sim.yaml).
+  ScannerConfig& sc = config.scanner;
+  ros_params::optional(pnh, "scanner/height", sc.height_m);
+  ros_params::optional(pnh, "scanner/x_offset", sc.x_offset_m);
+  ros_params::optional(pnh, "scanner/mount_offset", sc.mount_offset_m);
+  ros_params::optional(pnh, "scanner/min_range", sc.min_range_m);
+  ros_params::optional(pnh, "scanner/max_range", sc.max_range_m);
+  ros_params::optional(pnh, "scanner/plane_time", sc.plane_time_s);
+  // The selected profile's values from config/sim.yaml (profiles/<name>/sensor|motion/...).
+  const std::string pp = "profiles/" + profile + "/";
+  SensorNoiseConfig& sn = config.errors.sensor;
+  ros_params::optional(pnh, pp + "sensor/p_hit", sn.p_hit);
+  ros_params::optional(pnh, pp + "sensor/p_random", sn.p_random);
+  ros_params::optional(pnh, pp + "sensor/p_max", sn.p_max);
+  ros_params::optional(pnh, pp + "sensor/sigma_near", sn.sigma_near_m);
+  ros_params::optional(pnh, pp + "sensor/sigma_far_rel", sn.sigma_far_rel);
+  ros_params::optional(pnh, pp + "sensor/p_plane_loss", sn.p_plane_loss);
+  MotionConfig& mo = config.errors.motion;
+  ros_params::optional(pnh, pp + "motion/curvature", mo.curvature_per_m);
+  ros_params::optional(pnh, pp + "motion/curvature_sigma", mo.curvature_sigma_per_m);
+  ros_params::optional(pnh, pp + "motion/distance_error_rel", mo.distance_error_rel);
+  ros_params::optional(pnh, pp + "motion/distance_sigma_rel", mo.distance_sigma_rel);
+  ros_params::optional(pnh, pp + "motion/finish_angle", mo.finish_angle_rad);
+  ros_params::optional(pnh, pp + "motion/finish_angle_sigma", mo.finish_angle_sigma_rad);
+  ros_params::optional(pnh, pp + "motion/rotation_error_rel", mo.rotation_error_rel);
+  ros_params::optional(pnh, pp + "motion/rotation_sigma_rel", mo.rotation_sigma_rel);
+  ros_params::optional(pnh, pp + "motion/rotation_position_sigma", mo.rotation_position_sigma_m_per_rad);
+  ros_params::optional(pnh, "motion/linear_speed", mo.linear_speed_mps);
+  ros_params::optional(pnh, "motion/angular_speed", mo.angular_speed_radps);
+  ros_params::optional(pnh, "robot_radius", config.robot_radius_m);
+  ros_params::optional(pnh, "max_forward", config.max_forward_m);
+  ros_params::optional(pnh, "outlier_filter", config.outlier_filter);
+  config.validate();
+
+  std::string start_text;
+  ros_params::optional(pnh, "start_pose", start_text);
+  const Pose2D start = start_text.empty() ? defaultStartPose(baseName(world_path)) : parsePose2D(start_text);
+
+  ros_params::optional(pnh, "world_frame", world_frame_);
+  ros_params::optional(pnh, "map_frame", map_frame_);
+  ros_params::optional(pnh, "odom_frame", odom_frame_);
+  ros_params::optional(pnh, "base_frame", base_frame_);
+  ros_params::optional(pnh, "laser_frame", laser_frame_);
+  nh.param("/use_sim_time", publish_clock_, false);
+
+  ROS_INFO("sim_node: loading world %s", world_path.c_str());
+  World world = World::load(world_path, world_options);
+  try {
+    sim_ = std::make_unique<Simulator>(std::move(world), config, start);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(std::string("parameter '") + pnh.resolveName("start_pose") + "': " + e.what());
+  }
+  ROS_INFO("sim_node: %s (%zu triangles, %zu floor), start %s, profile %s, seed %d", world_path.c_str(),
+           sim_->world().mesh().faces.size(), sim_->world().floorTriangles(), start.toString().c_str(), profile.c_str(), seed);
+
+  if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
+  truth_pub_ = nh.advertise<nav_msgs::Odometry>("ground_truth", 10, true);
+  scan_pub_ = nh.advertise<sensor_msgs::PointCloud2>("scanner/last_scan", 1, true);
+  progress_pub_ = nh.advertise<scanstop_msgs::Progress>("scanner/progress", 10);
+  marker_pub_ = nh.advertise<visualization_msgs::Marker>("sim/world_mesh", 1, true);
+  take_scan_srv_ = nh.advertiseService("scanner/take_scan", &SimNode::onTakeScan, this);
+  rotate_srv_ = nh.advertiseService("base/rotate", &SimNode::onRotate, this);
+  forward_srv_ = nh.advertiseService("base/forward", &SimNode::onForward, this);
+  reset_srv_ = nh.advertiseService("sim/reset", &SimNode::onReset, this);
+  clock_timer_ = nh.createWallTimer(ros::WallDuration(0.1), &SimNode::onClockTimer, this);
+  publishState();
+  publishStaticTransforms();
+  publishWorldMarker();
+}
+
+ros::Time SimNode::now() const {
+  if (publish_clock_) return ros::Time(clock_start_s_ + sim_->clock());
+  return ros::Time::now();
+}
+
+void SimNode::onClockTimer(const ros::WallTimerEvent&) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!publish_clock_) return;
+  rosgraph_msgs::Clock clock;
+  clock.clock = now();
+  clock_pub_.publish(clock);
+}
+
+void SimNode::publishState() {
+  const ros::Time stamp = now();
+  if (publish_clock_) {
+    rosgraph_msgs::Clock clock;
+    clock.clock = stamp;
+    clock_pub_.publish(clock);
+  }
+  odom_pub_.publish(odometryMsg(sim_->odometry(), odom_frame_, base_frame_, stamp));
+  truth_pub_.publish(odometryMsg(sim_->trueInMap(), map_frame_, base_frame_ + "_truth", stamp));
+  tf_.sendTransform(ros_conv::toTransformMsg(sim_->odometry(), odom_frame_, base_frame_, stamp));
+}
+
+void SimNode::publishStaticTransforms() {
+  const ros::Time stamp = now();
+  Eigen::Isometry3d T_base_laser = Eigen::Isometry3d::Identity();
+  T_base_laser.translation() = Eigen::Vector3d(sim_->config().scanner.x_offset_m, 0.0, sim_->config().scanner.height_m);
+  static_tf_.sendTransform({ros_conv::toTransformMsg(sim_->start(), world_frame_, map_frame_, stamp),
+                            ros_conv::toTransformMsg(T_base_laser, base_frame_, laser_frame_, stamp)});
+}
+
+void SimNode::publishWorldMarker() {
+  visualization_msgs::Marker m;
+  m.header.frame_id = world_frame_;
+  m.header.stamp = now();
+  m.ns = "world";
+  m.type = visualization_msgs::Marker::TRIANGLE_LIST;
+  m.action = visualization_msgs::Marker::ADD;
+  m.pose.orientation.w = 1.0;
+  m.scale.x = m.scale.y = m.scale.z = 1.0;
+  m.color.r = m.color.g = m.color.b = 0.7f;
+  m.color.a = 0.35f;
+  const TriangleMesh& mesh = sim_->world().mesh();
+  m.points.reserve(mesh.faces.size() * 3);
+  for (const auto& f : mesh.faces) {
+    for (int k = 0; k < 3; ++k) {
+      geometry_msgs::Point p;
+      p.x = mesh.vertices[f[k]].x();
+      p.y = mesh.vertices[f[k]].y();
+      p.z = mesh.vertices[f[k]].z();
+      m.points.push_back(p);
+    }
+  }
+  marker_pub_.publish(m);
+}
+
+bool SimNode::onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (req.planes != 50 && req.planes != 100 && req.planes != 200 && req.planes != 400) {
+    res.success = false;
+    res.message = "planes = " + std::to_string(req.planes) + " is not one of 50, 100, 200, 400";
+    return true;
+  }
+  scanstop_msgs::Progress progress;
+  progress.header.stamp = now();
+  progress.step = "take_scan";
+  progress.total = req.planes;
+  progress.message = "scanning " + std::to_string(req.planes) + " planes";
+  progress_pub_.publish(progress);
+
+  const ScanOutput scan = sim_->scan(req.planes);
+  const ros::Time stamp = now();
+  res.cloud = ros_conv::toMsg(scan.cloud, base_frame_, stamp);
+  res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, stamp);
+  res.counts.raw_points = scan.raw_points;
+  res.counts.valid_points = scan.valid_points;
+  res.counts.planes_dropped = scan.planes_dropped;
+  res.counts.outliers_removed = scan.outliers_removed;
+  res.duration_s = scan.duration_s;
+  res.success = true;
+  publishState();
+  scan_pub_.publish(res.cloud);
+  progress.header.stamp = stamp;
+  progress.done = req.planes;
+  progress.message = std::to_string(scan.valid_points) + " valid points, " + std::to_string(scan.planes_dropped) +
+                     " planes dropped, " + std::to_string(scan.outliers_removed) + " outliers removed";
+  progress_pub_.publish(progress);
+  return true;
+}
+
+bool SimNode::onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!std::isfinite(req.angle_rad) || std::abs(req.angle_rad) > 2.0 * M_PI) {
+    res.success = false;
+    res.message = "angle_rad = " + std::to_string(req.angle_rad) + " must be finite and within [-2 pi, 2 pi]";
+    return true;
+  }
+  const MotionOutput out = sim_->rotate(req.angle_rad);
+  res.achieved_angle_rad = out.achieved;
+  res.collision = out.collision;
+  res.duration_s = out.duration_s;
+  res.success = !out.collision;
+  publishState();
+  res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, now());
+  return true;
+}
+
+bool SimNode::onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const double limit = sim_->config().max_forward_m;
+  if (!std::isfinite(req.distance_m) || std::abs(req.distance_m) > limit) {
+    res.success = false;
+    res.message = "distance_m = " + std::to_string(req.distance_m) + " must be finite and within [-" +
+                  std::to_string(limit) + ", " + std::to_string(limit) + "] m (parameter max_forward)";
+    return true;
+  }
+  const MotionOutput out = sim_->forward(req.distance_m);
+  res.achieved_distance_m = out.achieved;
+  res.collision = out.collision;
+  res.duration_s = out.duration_s;
+  res.success = !out.collision;
+  if (out.collision) res.message = "collision after " + std::to_string(out.achieved) + " m: the robot touched an obstacle";
+  publishState();
+  res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, now());
+  return true;
+}
+
+bool SimNode::onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::ResetSim::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    sim_->reset(Pose2D(req.pose.x, req.pose.y, req.pose.theta), req.seed);
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = e.what();
+    return true;
+  }
+  res.success = true;
+  publishState();
+  publishStaticTransforms();
+  return true;
+}
+
+}  // namespace sim
+}  // namespace scanstop

@@ -1,0 +1,118 @@
+// rostest of sim_node's wiring: a client takes a scan, rotates, drives, scans again, and drives into
+// a wall; it checks the cloud layout and frames, odometry against ground truth, and the collision.
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <scanstop_msgs/Forward.h>
+#include <scanstop_msgs/Rotate.h>
+#include <scanstop_msgs/TakeScan.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <cmath>
+
+#include "scanstop_common/ros/msg_conversion.h"
+
+namespace {
+
+using scanstop::Pose2D;
+
+template <typename Srv>
+Srv call(const std::string& name, Srv srv) {
+  ros::NodeHandle nh;
+  ros::ServiceClient client = nh.serviceClient<Srv>(name);
+  EXPECT_TRUE(client.waitForExistence(ros::Duration(30.0))) << name;
+  EXPECT_TRUE(client.call(srv)) << name;
+  return srv;
+}
+
+Pose2D groundTruth() {
+  const auto msg = ros::topic::waitForMessage<nav_msgs::Odometry>("ground_truth", ros::Duration(5.0));
+  EXPECT_TRUE(msg != nullptr);
+  EXPECT_EQ(msg->header.frame_id, "map");
+  return msg ? scanstop::ros_conv::fromPoseMsg(msg->pose.pose) : Pose2D();
+}
+
+TEST(SimNode, ScanRotateForwardScanAndCollide) {
+  // Listen to tf from the start: odom -> base_link is sent at every step (simulated time stands
+  // still between steps).
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  ros::NodeHandle nh;
+  while (nh.resolveName("tf").empty() || ros::topic::waitForMessage<nav_msgs::Odometry>("ground_truth", ros::Duration(1.0)) == nullptr)
+    ros::WallDuration(0.1).sleep();
+  ros::WallDuration(1.0).sleep();  // let the tf subscription connect before the first step
+  scanstop_msgs::TakeScan scan;
+  scan.request.planes = 100;
+  scan = call("scanner/take_scan", scan);
+  ASSERT_TRUE(scan.response.success) << scan.response.message;
+  EXPECT_EQ(scan.response.cloud.height, 100u);
+  EXPECT_EQ(scan.response.cloud.width, 682u);
+  EXPECT_FALSE(scan.response.cloud.is_dense);
+  EXPECT_EQ(scan.response.cloud.header.frame_id, "base_link");
+  EXPECT_EQ(scan.response.odom_pose.header.frame_id, "odom");
+  EXPECT_EQ(scan.response.counts.raw_points, 68200u);
+  EXPECT_GT(scan.response.counts.valid_points, 40000u);
+  EXPECT_DOUBLE_EQ(scan.response.duration_s, 10.0);
+  const scanstop::PointCloud cloud = scanstop::ros_conv::fromMsg(scan.response.cloud);
+  EXPECT_EQ(cloud.countFinite(), scan.response.counts.valid_points);
+
+  scanstop_msgs::Rotate rotate;
+  rotate.request.angle_rad = M_PI / 2;
+  rotate = call("base/rotate", rotate);
+  ASSERT_TRUE(rotate.response.success);
+  EXPECT_DOUBLE_EQ(rotate.response.achieved_angle_rad, M_PI / 2);
+
+  scanstop_msgs::Forward forward;
+  forward.request.distance_m = 1.5;
+  forward = call("base/forward", forward);
+  ASSERT_TRUE(forward.response.success);
+  EXPECT_FALSE(forward.response.collision);
+  // The perfect profile: odometry equals ground truth (both relative to the start pose).
+  const Pose2D odom = scanstop::ros_conv::fromPoseMsg(forward.response.odom_pose.pose);
+  const Pose2D truth = groundTruth();
+  EXPECT_NEAR(odom.x, 0.0, 1e-9);
+  EXPECT_NEAR(odom.y, 1.5, 1e-9);
+  EXPECT_NEAR(truth.x, odom.x, 1e-6);
+  EXPECT_NEAR(truth.y, odom.y, 1e-6);
+  EXPECT_NEAR(truth.yaw, odom.yaw, 1e-6);
+
+  // tf odom -> base_link matches the odometry at the current (simulated) time.
+  ros::WallDuration(0.5).sleep();
+  const auto tf = buffer.lookupTransform("odom", "base_link", ros::Time(0));
+  EXPECT_NEAR(tf.transform.translation.y, 1.5, 1e-6);
+  const auto laser = buffer.lookupTransform("base_link", "laser", ros::Time(0));
+  EXPECT_NEAR(laser.transform.translation.z, 0.45, 1e-9);
+
+  scan = call("scanner/take_scan", scan);
+  ASSERT_TRUE(scan.response.success);
+
+  // Turn west and drive 3 m: at y = 6.5 the cabinet along the west wall (front face x = 0.55) is
+  // 2.0 - 0.55 m ahead; the robot (radius 0.26 m) stops at contact.
+  rotate.request.angle_rad = M_PI / 2;
+  ASSERT_TRUE(call("base/rotate", rotate).response.success);
+  forward.request.distance_m = 3.0;
+  forward = call("base/forward", forward);
+  EXPECT_TRUE(forward.response.collision);
+  EXPECT_FALSE(forward.response.success);
+  EXPECT_NE(forward.response.message.find("collision"), std::string::npos);
+  EXPECT_NEAR(forward.response.achieved_distance_m, 2.0 - 0.55 - 0.26, 0.011);
+  EXPECT_GT(groundTruth().x + 2.0, 0.55 + 0.26 - 1e-6);  // never inside the cabinet (world x = 2 + map x)
+
+  // Absurd requests are refused with a reason, nothing moves.
+  forward.request.distance_m = 100.0;
+  forward = call("base/forward", forward);
+  EXPECT_FALSE(forward.response.success);
+  EXPECT_NE(forward.response.message.find("max_forward"), std::string::npos);
+  scan.request.planes = 123;
+  EXPECT_FALSE(call("scanner/take_scan", scan).response.success);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "sim_rostest");
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
