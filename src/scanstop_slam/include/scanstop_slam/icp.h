@@ -1,0 +1,79 @@
+#pragma once
+/// ICP after thesis Algorithm 4 (chapter 4): nearest-neighbour correspondences within c_max,
+/// translation from the centroids, rotation from the SVD of the correlation matrix, iterated until
+/// the change per iteration is below t_c and r_c. `3dof` (thesis 4.3: 2x2 correlation, rotation
+/// about z, z still counts in the correspondence search) or `6dof` (full 3x3).
+///
+/// The target is a VoxelMap: a persistent voxel hash over all map points that grows with every
+/// scan and is never rebuilt.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace scanstop {
+namespace slam {
+
+/// A voxel hash of map points for nearest-neighbour queries within a fixed radius.
+class VoxelMap {
+ public:
+  /// voxel_m >= the query radius (one ring of neighbour voxels is searched);
+  /// max_points_per_voxel bounds memory and query time on dense surfaces.
+  explicit VoxelMap(double voxel_m = 0.1, int max_points_per_voxel = 30);
+
+  /// Adds points (map frame); non-finite points are ignored.
+  void add(const std::vector<Eigen::Vector3f>& points);
+  /// Nearest stored point within radius_m (<= voxel size) of q; false if none.
+  bool nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2) const;
+
+  size_t size() const { return size_; }
+  double voxelSize() const { return voxel_; }
+  /// All stored points (for visualization).
+  std::vector<Eigen::Vector3f> points() const;
+
+ private:
+  using Key = int64_t;
+  Key key(int x, int y, int z) const;
+  double voxel_;
+  int max_per_voxel_;
+  size_t size_ = 0;
+  std::unordered_map<Key, std::vector<Eigen::Vector3f>> cells_;
+};
+
+/// ICP parameters (thesis optimum as defaults).
+struct IcpConfig {
+  double c_max_m = 0.10;              ///< correspondence distance [m]
+  double t_c_m = 0.0005;              ///< convergence: translation change per iteration [m]
+  double r_c_rad = 0.02 * M_PI / 180; ///< convergence: rotation change per iteration [rad]
+  int max_iterations = 100;
+  bool six_dof = false;               ///< false: 3dof (rotation about z, translation in x, y)
+  // Failure detection.
+  int min_correspondences = 200;
+  double min_overlap = 0.05;          ///< correspondences / source points
+  double max_correction_m = 1.0;      ///< a correction of the initial guess larger than this fails [m]
+  double max_correction_rad = 0.5;    ///< ... or a rotation larger than this [rad]
+  void validate() const;
+};
+
+/// The outcome of one registration.
+struct IcpResult {
+  Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();  ///< maps source points into the target frame
+  bool converged = false;       ///< converged within max_iterations and passed the checks
+  std::string failure;          ///< why not (empty when converged)
+  int iterations = 0;
+  size_t correspondences = 0;
+  double rms_m = 0.0;           ///< RMS distance of the final correspondences [m]
+  double overlap = 0.0;         ///< correspondences / source points
+};
+
+/// Registers source points (in their own frame) to the map, starting at T_init (source -> map).
+IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
+              const IcpConfig& config);
+
+/// Keeps one point per voxel (the first); voxel_m <= 0 returns the finite points unchanged.
+std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m);
+
+}  // namespace slam
+}  // namespace scanstop

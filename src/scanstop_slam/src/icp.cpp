@@ -1,0 +1,206 @@
+#include "scanstop_slam/icp.h"
+
+#include <Eigen/SVD>
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+#include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
+
+namespace scanstop {
+namespace slam {
+
+VoxelMap::VoxelMap(double voxel_m, int max_points_per_voxel) : voxel_(voxel_m), max_per_voxel_(max_points_per_voxel) {
+  requirePositive("voxel", voxel_m, "m");
+  if (max_points_per_voxel < 1) throw ConfigError("max_points_per_voxel must be >= 1");
+}
+
+VoxelMap::Key VoxelMap::key(int x, int y, int z) const {
+  // 21 bits per axis (+-1e6 voxels): +-100 km at 10 cm.
+  const auto enc = [](int v) { return static_cast<int64_t>(v + (1 << 20)) & ((1 << 21) - 1); };
+  return (enc(x) << 42) | (enc(y) << 21) | enc(z);
+}
+
+void VoxelMap::add(const std::vector<Eigen::Vector3f>& points) {
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    const int x = static_cast<int>(std::floor(p.x() / voxel_));
+    const int y = static_cast<int>(std::floor(p.y() / voxel_));
+    const int z = static_cast<int>(std::floor(p.z() / voxel_));
+    auto& cell = cells_[key(x, y, z)];
+    if (static_cast<int>(cell.size()) >= max_per_voxel_) continue;
+    cell.push_back(p);
+    ++size_;
+  }
+}
+
+bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2) const {
+  const int x = static_cast<int>(std::floor(q.x() / voxel_));
+  const int y = static_cast<int>(std::floor(q.y() / voxel_));
+  const int z = static_cast<int>(std::floor(q.z() / voxel_));
+  float best = static_cast<float>(radius_m * radius_m);
+  bool found = false;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz) {
+        const auto it = cells_.find(key(x + dx, y + dy, z + dz));
+        if (it == cells_.end()) continue;
+        for (const auto& p : it->second) {
+          const float d2 = (p - q).squaredNorm();
+          if (d2 < best) {
+            best = d2;
+            out = p;
+            found = true;
+          }
+        }
+      }
+  dist2 = best;
+  return found;
+}
+
+std::vector<Eigen::Vector3f> VoxelMap::points() const {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(size_);
+  for (const auto& [k, cell] : cells_) out.insert(out.end(), cell.begin(), cell.end());
+  return out;
+}
+
+void IcpConfig::validate() const {
+  requireInRange("c_max", c_max_m, 0.001, 5.0, "m");
+  requireInRange("t_c", t_c_m, 1e-9, 1.0, "m");
+  requireInRange("r_c", r_c_rad, 1e-9, 1.0, "rad");
+  requireInRange("max_iterations", max_iterations, 1, 10000);
+  requireInRange("min_correspondences", min_correspondences, 3, 1e9);
+  requireInRange("min_overlap", min_overlap, 0.0, 1.0);
+  requirePositive("max_correction", max_correction_m, "m");
+  requirePositive("max_correction_angle", max_correction_rad, "rad");
+}
+
+std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(points.size());
+  if (voxel_m <= 0.0) {
+    for (const auto& p : points)
+      if (p.allFinite()) out.push_back(p);
+    return out;
+  }
+  std::unordered_set<int64_t> seen;
+  seen.reserve(points.size());
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    const auto enc = [voxel_m](float v) {
+      return static_cast<int64_t>(std::floor(v / voxel_m) + (1 << 20)) & ((1 << 21) - 1);
+    };
+    const int64_t k = (enc(p.x()) << 42) | (enc(p.y()) << 21) | enc(p.z());
+    if (seen.insert(k).second) out.push_back(p);
+  }
+  return out;
+}
+
+IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
+              const IcpConfig& config) {
+  IcpResult result;
+  Eigen::Isometry3d T = T_init;
+  const long n = static_cast<long>(source.size());
+  std::vector<Eigen::Vector3f> matched(source.size());
+  std::vector<uint8_t> has(source.size(), 0);
+  const double c_max = std::min(config.c_max_m, target.voxelSize());
+  for (int it = 1; it <= config.max_iterations; ++it) {
+    result.iterations = it;
+    const Eigen::Isometry3f Tf = T.cast<float>();
+    // Correspondences (parallel): nearest map point within c_max of each transformed source point.
+#pragma omp parallel for schedule(dynamic, 2048)
+    for (long i = 0; i < n; ++i) {
+      float d2;
+      has[i] = target.nearest(Tf * source[i], c_max, matched[i], d2) ? 1 : 0;
+    }
+    // Centroids and correlation (in double, relative to the current pose).
+    // (The transformed source points are recomputed in double: float rounding would keep the
+    // per-iteration change from ever falling below tight t_c / r_c.)
+    Eigen::Vector3d cd = Eigen::Vector3d::Zero(), cm = Eigen::Vector3d::Zero();
+    size_t count = 0;
+    for (long i = 0; i < n; ++i) {
+      if (!has[i]) continue;
+      cd += T * source[i].cast<double>();
+      cm += matched[i].cast<double>();
+      ++count;
+    }
+    result.correspondences = count;
+    result.overlap = n > 0 ? static_cast<double>(count) / n : 0.0;
+    if (count < static_cast<size_t>(config.min_correspondences)) {
+      result.failure = "too few correspondences (" + std::to_string(count) + " < " +
+                       std::to_string(config.min_correspondences) + ") within c_max = " + std::to_string(c_max) + " m";
+      result.T_target_source = T_init;
+      return result;
+    }
+    cd /= count;
+    cm /= count;
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (long i = 0; i < n; ++i) {
+      if (!has[i]) continue;
+      H += (T * source[i].cast<double>() - cd) * (matched[i].cast<double>() - cm).transpose();
+    }
+    // Rotation from the SVD of the correlation matrix (Algorithm 4, lines 9-11): R = V U^T.
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    if (config.six_dof) {
+      Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+      D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+      R = svd.matrixV() * D * svd.matrixU().transpose();
+    } else {
+      const Eigen::Matrix2d H2 = H.topLeftCorner<2, 2>();
+      Eigen::JacobiSVD<Eigen::Matrix2d> svd(H2, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix2d D = Eigen::Matrix2d::Identity();
+      D(1, 1) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+      R.topLeftCorner<2, 2>() = svd.matrixV() * D * svd.matrixU().transpose();
+    }
+    Eigen::Vector3d t = cm - R * cd;
+    if (!config.six_dof) t.z() = 0.0;
+    Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
+    delta.linear() = R;
+    delta.translation() = t;
+    T = delta * T;
+    const double dt = t.norm();
+    const double dr = Eigen::AngleAxisd(R).angle();
+    if (dt < config.t_c_m && dr < config.r_c_rad) {
+      result.converged = true;
+      break;
+    }
+  }
+  // Final figures at the converged pose.
+  double sum2 = 0.0;
+  size_t count = 0;
+  const Eigen::Isometry3f Tf = T.cast<float>();
+#pragma omp parallel for reduction(+ : sum2, count) schedule(dynamic, 2048)
+  for (long i = 0; i < n; ++i) {
+    Eigen::Vector3f m;
+    float d2;
+    if (target.nearest(Tf * source[i], c_max, m, d2)) {
+      sum2 += d2;
+      ++count;
+    }
+  }
+  result.correspondences = count;
+  result.overlap = n > 0 ? static_cast<double>(count) / n : 0.0;
+  result.rms_m = count > 0 ? std::sqrt(sum2 / count) : 0.0;
+  result.T_target_source = T;
+  const Eigen::Isometry3d correction = T_init.inverse() * T;
+  if (!result.converged) {
+    result.failure = "no convergence within " + std::to_string(config.max_iterations) + " iterations";
+  } else if (correction.translation().norm() > config.max_correction_m ||
+             Eigen::AngleAxisd(correction.linear()).angle() > config.max_correction_rad) {
+    result.converged = false;
+    result.failure = "the correction of the initial guess (" + std::to_string(correction.translation().norm()) +
+                     " m, " + std::to_string(Eigen::AngleAxisd(correction.linear()).angle()) +
+                     " rad) exceeds the bound";
+  } else if (result.overlap < config.min_overlap || count < static_cast<size_t>(config.min_correspondences)) {
+    result.converged = false;
+    result.failure = "overlap " + std::to_string(result.overlap) + " below min_overlap " + std::to_string(config.min_overlap);
+  }
+  if (!result.converged) result.T_target_source = T_init;
+  return result;
+}
+
+}  // namespace slam
+}  // namespace scanstop

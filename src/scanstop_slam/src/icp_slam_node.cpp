@@ -1,0 +1,185 @@
+// icp_slam_node wires IcpSlam to ROS: it serves slam/register_scan, writes the map directory after
+// every scan, and publishes the corrected pose, tf map -> odom, the path of scan poses, each
+// registered scan once in the map frame, and a voxel-downsampled map cloud.
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <scanstop_msgs/RegisterScan.h>
+#include <scanstop_msgs/RegisteredScan.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <memory>
+#include <mutex>
+
+#include "scanstop_common/error.h"
+#include "scanstop_common/map_dir.h"
+#include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/params.h"
+#include "scanstop_slam/icp_slam.h"
+
+namespace scanstop {
+namespace slam {
+
+class IcpSlamNode {
+ public:
+  IcpSlamNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
+    SlamConfig config;
+    std::string mode = "3dof";
+    ros_params::optional(pnh, "mode", mode);
+    requireMode(pnh, mode);
+    config.icp.six_dof = mode == "6dof";
+    ros_params::optional(pnh, "c_max", config.icp.c_max_m);
+    ros_params::optional(pnh, "t_c", config.icp.t_c_m);
+    double r_c_deg = config.icp.r_c_rad * 180.0 / M_PI;
+    ros_params::optional(pnh, "r_c_deg", r_c_deg);
+    config.icp.r_c_rad = r_c_deg * M_PI / 180.0;
+    ros_params::optional(pnh, "max_iterations", config.icp.max_iterations);
+    ros_params::optional(pnh, "min_correspondences", config.icp.min_correspondences);
+    ros_params::optional(pnh, "min_overlap", config.icp.min_overlap);
+    ros_params::optional(pnh, "max_correction", config.icp.max_correction_m);
+    ros_params::optional(pnh, "max_correction_angle", config.icp.max_correction_rad);
+    ros_params::optional(pnh, "source_voxel", config.source_voxel_m);
+    ros_params::optional(pnh, "max_points_per_voxel", config.max_points_per_voxel);
+    ros_params::optional(pnh, "map_cloud_voxel", map_cloud_voxel_m_);
+    ros_params::optional(pnh, "sensor_height", sensor_height_m_);
+    ros_params::optional(pnh, "map_frame", map_frame_);
+    ros_params::optional(pnh, "odom_frame", odom_frame_);
+    ros_params::optional(pnh, "base_frame", base_frame_);
+    std::string map_dir;
+    ros_params::optional(pnh, "map_dir", map_dir);
+    config.validate();
+    slam_ = std::make_unique<IcpSlam>(config, map_dir);
+    if (slam_->scanCount() > 0)
+      ROS_INFO("icp_slam_node: resumed the map in %s with %zu scans (%zu map points)", map_dir.c_str(),
+               slam_->scanCount(), slam_->map().size());
+
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("slam/pose", 10, true);
+    path_pub_ = nh.advertise<nav_msgs::Path>("slam/path", 1, true);
+    scan_pub_ = nh.advertise<scanstop_msgs::RegisteredScan>("slam/registered_scan", 50);
+    map_pub_ = nh.advertise<sensor_msgs::PointCloud2>("slam/map_cloud", 1, true);
+    server_ = nh.advertiseService("slam/register_scan", &IcpSlamNode::onRegister, this);
+    timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { publishTf(false); });
+    path_.header.frame_id = map_frame_;
+    if (const MapDirectory* dir = slam_->mapDirectory()) {
+      for (const MapScanInfo& s : dir->scans()) path_.poses.push_back(ros_conv::toPoseStamped(s.map_pose, map_frame_, ros::Time(s.stamp_s)));
+      publishMap(ros::Time::now());
+    }
+    publishTf(true);
+  }
+
+ private:
+  static void requireMode(const ros::NodeHandle& pnh, const std::string& mode) {
+    if (mode != "3dof" && mode != "6dof")
+      throw ConfigError("parameter '" + pnh.resolveName("mode") + "' = '" + mode + "' must be 3dof or 6dof");
+  }
+
+  void publishTf(bool force) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ros::Time now = ros::Time::now();
+    if (!force && now <= last_tf_stamp_) return;  // simulated time stands still between steps
+    last_tf_stamp_ = now;
+    tf_.sendTransform(ros_conv::toTransformMsg(slam_->mapFromOdom(), map_frame_, odom_frame_, now));
+  }
+
+  void publishMap(const ros::Time& stamp) {
+    PointCloud cloud;
+    cloud.points = voxelDownsample(slam_->map().points(), map_cloud_voxel_m_);
+    cloud.setUnorganized();
+    map_pub_.publish(ros_conv::toMsg(cloud, map_frame_, stamp));
+    path_.header.stamp = stamp;
+    path_pub_.publish(path_);
+  }
+
+  bool onRegister(scanstop_msgs::RegisterScan::Request& req, scanstop_msgs::RegisterScan::Response& res) {
+    PointCloud scan;
+    Pose2D odom;
+    try {
+      if (!req.cloud.header.frame_id.empty() && req.cloud.header.frame_id != base_frame_)
+        throw std::invalid_argument("the cloud is in frame '" + req.cloud.header.frame_id + "', expected '" +
+                                    base_frame_ + "' (the robot frame at scan time)");
+      scan = ros_conv::fromMsg(req.cloud);
+      odom = ros_conv::fromPoseMsg(req.odom_pose.pose);
+    } catch (const std::exception& e) {
+      res.success = false;
+      res.message = std::string("bad request: ") + e.what();
+      ROS_WARN("icp_slam_node: refused a scan: %s", res.message.c_str());
+      return true;
+    }
+    if (scan.countFinite() == 0) {
+      res.success = false;
+      res.message = "bad request: the cloud has no finite point";
+      return true;
+    }
+    Registration r;
+    try {
+      std::lock_guard<std::mutex> lock(mutex_);
+      r = slam_->registerScan(scan, odom, Eigen::Vector3d(0, 0, sensor_height_m_), req.cloud.header.stamp.toSec());
+    } catch (const std::exception& e) {
+      res.success = false;
+      res.message = std::string("could not store the scan: ") + e.what();
+      ROS_ERROR("icp_slam_node: %s", res.message.c_str());
+      return true;
+    }
+    const ros::Time stamp = req.cloud.header.stamp.isZero() ? ros::Time::now() : req.cloud.header.stamp;
+    res.success = true;
+    res.converged = r.converged;
+    res.message = r.converged ? "" : "registration failed, kept the odometry pose: " + r.failure;
+    res.duration_s = r.time_s;
+    res.map_pose = ros_conv::toPoseStamped(r.map_pose, map_frame_, stamp);
+    res.iterations = static_cast<uint32_t>(r.iterations);
+    res.correspondences = static_cast<uint32_t>(r.correspondences);
+    res.rms_m = r.rms_m;
+    res.overlap = r.overlap;
+    res.scan_index = r.index;
+    if (r.converged)
+      ROS_INFO("icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s", r.index,
+               r.map_pose.toString().c_str(), r.iterations, r.correspondences, r.rms_m * 1000, r.time_s);
+    else
+      ROS_WARN("icp_slam_node: scan %u: %s", r.index, res.message.c_str());
+
+    pose_pub_.publish(res.map_pose);
+    publishTf(true);
+    path_.poses.push_back(res.map_pose);
+    scanstop_msgs::RegisteredScan out;
+    out.header.frame_id = map_frame_;
+    out.header.stamp = stamp;
+    out.scan_index = r.index;
+    out.pose = res.map_pose;
+    const Eigen::Vector3d origin = r.map_pose.toIsometry3d() * Eigen::Vector3d(0, 0, sensor_height_m_);
+    out.sensor_origin.x = origin.x();
+    out.sensor_origin.y = origin.y();
+    out.sensor_origin.z = origin.z();
+    out.cloud = ros_conv::toMsg(transformCloud(removeNonFinite(scan), r.map_pose.toIsometry3f()), map_frame_, stamp);
+    out.registration_ok = r.converged;
+    scan_pub_.publish(out);
+    publishMap(stamp);
+    return true;
+  }
+
+  std::unique_ptr<IcpSlam> slam_;
+  std::mutex mutex_;
+  double map_cloud_voxel_m_ = 0.05;
+  double sensor_height_m_ = 0.45;
+  std::string map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link";
+  ros::Publisher pose_pub_, path_pub_, scan_pub_, map_pub_;
+  ros::ServiceServer server_;
+  ros::WallTimer timer_;
+  tf2_ros::TransformBroadcaster tf_;
+  nav_msgs::Path path_;
+  ros::Time last_tf_stamp_;
+};
+
+}  // namespace slam
+}  // namespace scanstop
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "icp_slam_node");
+  ros::NodeHandle nh, pnh("~");
+  try {
+    scanstop::slam::IcpSlamNode node(nh, pnh);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("icp_slam_node: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,218 @@
+// ICP and ICP SLAM on synthetic clouds with known transforms, and on the real Stanford bunny scans.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/shared_data.h"
+#include "scanstop_slam/icp_slam.h"
+
+namespace scanstop {
+namespace slam {
+namespace {
+
+/// Points on the floor, three walls and a box of a 6 x 5 x 2.5 m room (enough structure to fix x, y, yaw).
+std::vector<Eigen::Vector3f> roomPoints(std::mt19937& rng, int n) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < n; ++i) {
+    const float a = u(rng), b = u(rng);
+    switch (i % 6) {
+      case 0: pts.emplace_back(6 * a - 3, 5 * b - 2.5f, 0.0f); break;       // floor
+      case 1: pts.emplace_back(-3.0f, 5 * a - 2.5f, 2.5f * b); break;       // west wall
+      case 2: pts.emplace_back(6 * a - 3, 2.5f, 2.5f * b); break;           // north wall
+      case 3: pts.emplace_back(6 * a - 3, -2.5f, 2.5f * b); break;          // south wall
+      case 4: pts.emplace_back(1.0f + 0.5f * a, 0.5f, 0.8f * b); break;     // a box face
+      default: pts.emplace_back(1.0f, 0.5f * a, 0.8f * b); break;           // another box face
+    }
+  }
+  return pts;
+}
+
+std::vector<Eigen::Vector3f> transformed(const std::vector<Eigen::Vector3f>& pts, const Eigen::Isometry3d& T) {
+  std::vector<Eigen::Vector3f> out;
+  for (const auto& p : pts) out.push_back((T * p.cast<double>()).cast<float>());
+  return out;
+}
+
+Eigen::Isometry3d pose(double x, double y, double z, double roll, double pitch, double yaw) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+IcpConfig exactConfig(bool six_dof) {
+  IcpConfig c;
+  c.six_dof = six_dof;
+  c.c_max_m = 0.3;
+  c.t_c_m = 1e-8;  // the points are float: updates do not get much smaller
+  c.r_c_rad = 1e-8;
+  c.max_iterations = 200;
+  c.max_correction_rad = 1.0;
+  return c;
+}
+
+double rotationError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+}
+
+TEST(Icp, RecoversAKnownPlanarTransformExactly) {
+  std::mt19937 rng(3);
+  const std::vector<Eigen::Vector3f> src = roomPoints(rng, 6000);
+  const Eigen::Isometry3d T = pose(0.12, -0.07, 0.0, 0, 0, 4.0 * M_PI / 180);
+  VoxelMap map(0.3, 100000);
+  map.add(transformed(src, T));
+  const IcpResult r = icp(map, src, Eigen::Isometry3d::Identity(), exactConfig(false));
+  ASSERT_TRUE(r.converged) << r.failure << " err " << (r.T_target_source.translation() - T.translation()).norm() << " rms " << r.rms_m;
+  EXPECT_LT((r.T_target_source.translation() - T.translation()).norm(), 1e-6);
+  EXPECT_LT(rotationError(r.T_target_source, T), 1e-6);
+  EXPECT_LT(r.rms_m, 1e-6);
+  EXPECT_NEAR(r.overlap, 1.0, 1e-9);
+}
+
+TEST(Icp, SixDofRecoversAFullTransformAndAgreesWithThreeDofOnFlatProblems) {
+  std::mt19937 rng(5);
+  const std::vector<Eigen::Vector3f> src = roomPoints(rng, 6000);
+  const Eigen::Isometry3d T6 = pose(0.05, 0.1, 0.04, 0.02, -0.015, 0.05);
+  VoxelMap map6(0.3, 100000);
+  map6.add(transformed(src, T6));
+  const IcpResult r6 = icp(map6, src, Eigen::Isometry3d::Identity(), exactConfig(true));
+  ASSERT_TRUE(r6.converged) << r6.failure;
+  EXPECT_LT((r6.T_target_source.translation() - T6.translation()).norm(), 1e-6);
+  EXPECT_LT(rotationError(r6.T_target_source, T6), 1e-6);
+
+  const Eigen::Isometry3d T3 = pose(-0.1, 0.08, 0.0, 0, 0, -0.06);
+  VoxelMap map3(0.3, 100000);
+  map3.add(transformed(src, T3));
+  const IcpResult a = icp(map3, src, Eigen::Isometry3d::Identity(), exactConfig(false));
+  const IcpResult b = icp(map3, src, Eigen::Isometry3d::Identity(), exactConfig(true));
+  ASSERT_TRUE(a.converged && b.converged);
+  EXPECT_LT((a.T_target_source.translation() - b.T_target_source.translation()).norm(), 1e-6);
+  EXPECT_LT(rotationError(a.T_target_source, b.T_target_source), 1e-6);
+}
+
+TEST(Icp, NoisyCloudsStayWithinTheNoiseBound) {
+  std::mt19937 rng(9);
+  const std::vector<Eigen::Vector3f> src = roomPoints(rng, 20000);
+  const Eigen::Isometry3d T = pose(0.2, 0.1, 0.0, 0, 0, -0.08);
+  std::vector<Eigen::Vector3f> target = transformed(roomPoints(rng, 20000), T);  // other samples of the same surfaces
+  std::normal_distribution<float> noise(0.0f, 0.005f);
+  for (auto& p : target) p += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
+  VoxelMap map(0.1, 1000);
+  map.add(target);
+  IcpConfig c;  // thesis defaults
+  c.max_correction_rad = 1.0;
+  const IcpResult r = icp(map, src, Eigen::Isometry3d::Identity(), c);
+  ASSERT_TRUE(r.converged) << r.failure;
+  EXPECT_LT((r.T_target_source.translation() - T.translation()).norm(), 0.005);
+  EXPECT_LT(rotationError(r.T_target_source, T), 0.2 * M_PI / 180);
+}
+
+TEST(Icp, FailureIsDetectedOnCloudsThatDoNotOverlap) {
+  std::mt19937 rng(11);
+  const std::vector<Eigen::Vector3f> src = roomPoints(rng, 3000);
+  VoxelMap map(0.1, 1000);
+  map.add(transformed(src, pose(20.0, 0, 0, 0, 0, 0)));
+  const Eigen::Isometry3d init = pose(0.3, 0, 0, 0, 0, 0.1);
+  const IcpResult r = icp(map, src, init, IcpConfig());
+  EXPECT_FALSE(r.converged);
+  EXPECT_NE(r.failure.find("too few correspondences"), std::string::npos) << r.failure;
+  EXPECT_TRUE(r.T_target_source.isApprox(init));
+}
+
+TEST(IcpSlam, CorrectsOdometryDriftAndPersistsTheMap) {
+  std::mt19937 rng(13);
+  const std::vector<Eigen::Vector3f> world = roomPoints(rng, 60000);
+  char pattern[] = "/tmp/scanstop_slam_test_XXXXXX";
+  const std::string dir = mkdtemp(pattern);
+  const std::vector<Pose2D> truth = {{0, 0, 0}, {0.8, 0.3, 0.2}, {1.5, -0.4, -0.3}, {0.4, 0.9, 1.0}};
+  SlamConfig config;
+  config.source_voxel_m = 0.0;
+  {
+    IcpSlam slam(config, dir + "/map");
+    Pose2D odom;
+    for (size_t i = 0; i < truth.size(); ++i) {
+      // Each scan sees the room from its true pose; odometry drifts (5 % scale, 2 deg per step).
+      PointCloud scan;
+      scan.points = transformed(world, truth[i].toIsometry3d().inverse());
+      scan.setUnorganized();
+      if (i > 0) {
+        const Pose2D step = truth[i - 1].between(truth[i]);
+        odom = odom * Pose2D(step.x * 1.05, step.y * 1.05, step.yaw + 2.0 * M_PI / 180);
+      }
+      const Registration r = slam.registerScan(scan, odom, Eigen::Vector3d(0, 0, 0.45), i * 40.0);
+      ASSERT_TRUE(r.converged) << "scan " << i << ": " << r.failure;
+      EXPECT_LT(std::hypot(r.map_pose.x - truth[i].x, r.map_pose.y - truth[i].y), 0.005) << "scan " << i;
+      EXPECT_LT(std::abs(normalizeAngle(r.map_pose.yaw - truth[i].yaw)), 0.1 * M_PI / 180) << "scan " << i;
+      if (i == 3) {
+        EXPECT_GT(std::hypot(odom.x - truth[i].x, odom.y - truth[i].y), 0.03);  // odometry alone is off
+      }
+    }
+  }
+  // A restarted node resumes from the map directory.
+  IcpSlam resumed(config, dir + "/map");
+  EXPECT_EQ(resumed.scanCount(), truth.size());
+  EXPECT_NEAR(resumed.lastMapPose().x, truth.back().x, 0.005);
+  EXPECT_GT(resumed.map().size(), 10000u);
+  EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
+}
+
+/// Reads bun.conf: scan -> T_common_scan (p_common = R(q)^T p + t, see ../shared/data/README.md).
+std::map<std::string, Eigen::Isometry3d> bunnyPoses() {
+  std::map<std::string, Eigen::Isometry3d> poses;
+  std::ifstream in(sharedDataPath("bunny/scans/bun.conf"));
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string tag, file;
+    double tx, ty, tz, qx, qy, qz, qw;
+    if (!(s >> tag >> file >> tx >> ty >> tz >> qx >> qy >> qz >> qw) || tag != "bmesh") continue;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix().transpose();
+    T.translation() = Eigen::Vector3d(tx, ty, tz);
+    poses[file] = T;
+  }
+  return poses;
+}
+
+TEST(IcpRealData, BunnyPairFromAPerturbedStartRecoversTheReferencePose) {
+  const auto poses = bunnyPoses();
+  ASSERT_EQ(poses.size(), 10u);
+  const PointCloud target = readCloud(sharedDataPath("bunny/scans/bun000.ply"));
+  const PointCloud source = readCloud(sharedDataPath("bunny/scans/bun045.ply"));
+  const Eigen::Isometry3d T_ref = poses.at("bun000.ply").inverse() * poses.at("bun045.ply");
+  VoxelMap map(0.005, 1000);
+  map.add(target.points);
+  IcpConfig c;
+  c.six_dof = true;
+  c.c_max_m = 0.005;
+  c.t_c_m = 1e-6;
+  c.r_c_rad = 0.001 * M_PI / 180;
+  c.max_iterations = 300;
+  c.min_overlap = 0.2;
+  const Eigen::Isometry3d init = T_ref * pose(0.003, -0.002, 0.002, 0.02, -0.01, 0.03);
+  IcpResult r;
+  Eigen::Isometry3d T = init;
+  for (const double c_max : {0.005, 0.0025, 0.00125}) {  // coarse to fine
+    c.c_max_m = c_max;
+    VoxelMap fine(c_max, 1000);
+    fine.add(target.points);
+    r = icp(fine, source.points, T, c);
+    ASSERT_TRUE(r.converged) << r.failure;
+    T = r.T_target_source;
+  }
+  const Eigen::Isometry3d err = T_ref.inverse() * r.T_target_source;
+  EXPECT_LT(err.translation().norm(), 0.001) << "translation error " << err.translation().norm() * 1000 << " mm";
+  EXPECT_LT(Eigen::AngleAxisd(err.linear()).angle(), 0.2 * M_PI / 180);
+}
+
+}  // namespace
+}  // namespace slam
+}  // namespace scanstop
