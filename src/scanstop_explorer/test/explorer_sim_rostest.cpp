@@ -158,7 +158,8 @@ TEST(ExplorerInSim, PathsInRoom10x8AreCollisionFreeAndDrivable) {
   EXPECT_GT(plans, 5);  // the termination did not fire early
   EXPECT_GT(last_coverage, 0.9);
   std::string run_dir;
-  if (ros::param::get("/explorer_node/run_dir", run_dir) && run_dir.rfind("/tmp/explorer_sim_rostest_run", 0) == 0)
+  if (ros::param::get("/explorer_node/run_dir", run_dir) && run_dir.rfind("/tmp/explorer_sim_rostest_run", 0) == 0 &&
+      !std::getenv("EXPLORER_KEEP_RUN_DIR"))  // set it to page through the step images afterwards
     std::system(("rm -rf " + run_dir).c_str());
 }
 
