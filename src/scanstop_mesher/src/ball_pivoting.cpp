@@ -1,0 +1,479 @@
+#include "scanstop_mesher/ball_pivoting.h"
+
+#include "scanstop_mesher/mesh_analysis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace scanstop {
+namespace mesher {
+namespace {
+
+enum : uint8_t {
+  kActive = 0,    // waiting to be pivoted
+  kBoundary = 1,  // no valid triangle for this radius
+  kRemoved = 2,   // no longer on the front
+};
+
+constexpr uint64_t kEmptyKey = std::numeric_limits<uint64_t>::max();
+constexpr double kTwoPi = 2.0 * M_PI;
+/// A point counts as inside a ball when its squared distance to the centre is below
+/// r^2 * (1 - kInsideEps): points on the sphere (co-circular samples) do not block it.
+constexpr double kInsideEps = 1e-7;
+
+inline uint64_t edgeKey(int a, int b) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
+}
+inline size_t hashKey(uint64_t k) {
+  k *= 0x9E3779B97F4A7C15ull;
+  return static_cast<size_t>(k ^ (k >> 31));
+}
+
+}  // namespace
+
+BallPivoting::BallPivoting(const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector3f>& normals) {
+  if (points.size() != normals.size())
+    throw std::invalid_argument("BallPivoting: " + std::to_string(points.size()) + " points but " +
+                                std::to_string(normals.size()) + " normals");
+  if (points.size() >= static_cast<size_t>(std::numeric_limits<int>::max()))
+    throw std::invalid_argument("BallPivoting: too many points (" + std::to_string(points.size()) + ")");
+  const size_t n = points.size();
+  p_.resize(n);
+  n_.resize(n);
+  valid_.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = points[i].cast<double>();
+    const Eigen::Vector3d nn = normals[i].cast<double>();
+    const double len = nn.norm();
+    if (p.allFinite() && nn.allFinite() && len > 1e-6) {
+      p_[i] = p;
+      n_[i] = nn / len;
+      valid_[i] = 1;
+      ++stats_.points;
+    } else {
+      // Left out of the grid: such a point neither becomes a vertex nor blocks a ball.
+      p_[i] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+      n_[i] = Eigen::Vector3d::Zero();
+    }
+  }
+  used_.assign(n, 0);
+  out_head_.assign(n, -1);
+  front_deg_.assign(n, 0);
+  dir_edges_.assign(1024, kEmptyKey);
+}
+
+BallPivoting::~BallPivoting() = default;
+
+bool BallPivoting::insertDirEdge(uint64_t key) {
+  if (2 * (dir_edge_count_ + 1) > dir_edges_.size()) {
+    std::vector<uint64_t> old;
+    old.swap(dir_edges_);
+    dir_edges_.assign(old.size() * 2, kEmptyKey);
+    dir_edge_count_ = 0;
+    for (uint64_t k : old)
+      if (k != kEmptyKey) insertDirEdge(k);
+  }
+  const size_t mask = dir_edges_.size() - 1;
+  for (size_t h = hashKey(key) & mask;; h = (h + 1) & mask) {
+    if (dir_edges_[h] == key) return false;
+    if (dir_edges_[h] == kEmptyKey) {
+      dir_edges_[h] = key;
+      ++dir_edge_count_;
+      return true;
+    }
+  }
+}
+
+bool BallPivoting::hasDirEdge(uint64_t key) const {
+  const size_t mask = dir_edges_.size() - 1;
+  for (size_t h = hashKey(key) & mask;; h = (h + 1) & mask) {
+    if (dir_edges_[h] == key) return true;
+    if (dir_edges_[h] == kEmptyKey) return false;
+  }
+}
+
+bool BallPivoting::edgeUsed(int a, int b) const { return hasDirEdge(edgeKey(a, b)); }
+
+bool BallPivoting::ballCenter(int a, int b, int c, Eigen::Vector3d& center) const {
+  const Eigen::Vector3d ab = p_[b] - p_[a];
+  const Eigen::Vector3d ac = p_[c] - p_[a];
+  const Eigen::Vector3d n = ab.cross(ac);
+  const double n2 = n.squaredNorm();
+  const double ab2 = ab.squaredNorm(), ac2 = ac.squaredNorm();
+  if (!(n2 > 1e-12 * ab2 * ac2)) return false;  // (nearly) collinear or coincident corners
+  const Eigen::Vector3d cc = p_[a] + (ac2 * n.cross(ab) + ab2 * ac.cross(n)) / (2.0 * n2);
+  const double h2 = radius_ * radius_ - (cc - p_[a]).squaredNorm();
+  if (h2 < 0.0) return false;  // no ball of this radius touches the three points
+  center = cc + std::sqrt(h2 / n2) * n;
+  return true;
+}
+
+bool BallPivoting::normalsAgree(int a, int b, int c) const {
+  const Eigen::Vector3d n = (p_[b] - p_[a]).cross(p_[c] - p_[a]);
+  return n.dot(n_[a]) > 0.0 && n.dot(n_[b]) > 0.0 && n.dot(n_[c]) > 0.0;
+}
+
+bool BallPivoting::ballEmpty(const Eigen::Vector3d& center, const std::vector<uint32_t>& candidates, int a, int b,
+                             int c) const {
+  const double limit = radius_ * radius_ * (1.0 - kInsideEps);
+  for (uint32_t q : candidates) {
+    if (static_cast<int>(q) == a || static_cast<int>(q) == b || static_cast<int>(q) == c) continue;
+    if ((p_[q] - center).squaredNorm() < limit) return false;
+  }
+  return true;
+}
+
+int BallPivoting::newEdge(int a, int b, int opp, const Eigen::Vector3d& center, int loop) {
+  Edge e;
+  e.a = a;
+  e.b = b;
+  e.opp = opp;
+  e.next = e.prev = -1;
+  e.loop = loop;
+  e.center = center;
+  e.state = kActive;
+  e.next_out = out_head_[a];
+  edges_.push_back(e);
+  const int id = static_cast<int>(edges_.size()) - 1;
+  out_head_[a] = id;
+  ++front_deg_[a];
+  active_.push_back(id);
+  return id;
+}
+
+void BallPivoting::removeEdge(int e) {
+  Edge& E = edges_[e];
+  E.state = kRemoved;
+  --front_deg_[E.a];
+  if (out_head_[E.a] == e) {
+    out_head_[E.a] = E.next_out;
+    return;
+  }
+  for (int x = out_head_[E.a]; x >= 0; x = edges_[x].next_out)
+    if (edges_[x].next_out == e) {
+      edges_[x].next_out = E.next_out;
+      return;
+    }
+}
+
+int BallPivoting::findFront(int a, int b) const {
+  for (int x = out_head_[a]; x >= 0; x = edges_[x].next_out)
+    if (edges_[x].b == b) return x;
+  return -1;
+}
+
+void BallPivoting::addFace(int a, int b, int c) {
+  faces_.emplace_back(a, b, c);
+  used_[a] = used_[b] = used_[c] = 1;
+  insertDirEdge(edgeKey(a, b));
+  insertDirEdge(edgeKey(b, c));
+  insertDirEdge(edgeKey(c, a));
+}
+
+void BallPivoting::addSeed(int a, int b, int c, const Eigen::Vector3d& center) {
+  addFace(a, b, c);
+  const int loop = static_cast<int>(loop_size_.size());
+  loop_size_.push_back(3);
+  const int e0 = newEdge(a, b, c, center, loop);
+  const int e1 = newEdge(b, c, a, center, loop);
+  const int e2 = newEdge(c, a, b, center, loop);
+  const int ids[3] = {e0, e1, e2};
+  for (int k = 0; k < 3; ++k) {
+    Edge& E = edges_[ids[k]];
+    E.next = ids[(k + 1) % 3];
+    E.prev = ids[(k + 2) % 3];
+  }
+  ++stats_.seeds;
+}
+
+void BallPivoting::relabel(int start, int loop) {
+  int e = start;
+  do {
+    edges_[e].loop = loop;
+    e = edges_[e].next;
+  } while (e != start);
+}
+
+void BallPivoting::glue(int x, int y) {
+  // x and y have the same end points and opposite directions; both leave the front.
+  Edge& X = edges_[x];
+  Edge& Y = edges_[y];
+  const int lx = X.loop, ly = Y.loop;
+  if (lx == ly) {
+    if (X.next == y && Y.next == x) {
+      // Case 1: the loop consists of these two edges only: it disappears.
+      ++stats_.glue[0];
+      loop_size_[lx] = 0;
+    } else if (X.next == y || Y.next == x) {
+      // Case 2: adjacent in a longer loop: unlink both.
+      ++stats_.glue[1];
+      const int first = X.next == y ? x : y;
+      const int second = first == x ? y : x;
+      const int before = edges_[first].prev, after = edges_[second].next;
+      edges_[before].next = after;
+      edges_[after].prev = before;
+      loop_size_[lx] -= 2;
+    } else {
+      // Case 3: same loop, not adjacent: the loop splits into two.
+      ++stats_.glue[2];
+      const int xn = X.next, xp = X.prev, yn = Y.next, yp = Y.prev;
+      edges_[yp].next = xn;
+      edges_[xn].prev = yp;  // loop A: xn ... yp
+      edges_[xp].next = yn;
+      edges_[yn].prev = xp;  // loop B: yn ... xp
+      // Count the smaller part by walking both at once; give it a new loop id.
+      int a = xn, b = yn, na = 0, nb = 0;
+      for (;;) {
+        ++na;
+        ++nb;
+        a = edges_[a].next;
+        b = edges_[b].next;
+        if (a == xn || b == yn) break;
+      }
+      const int total = loop_size_[lx] - 2;
+      const int fresh = static_cast<int>(loop_size_.size());
+      if (a == xn) {
+        loop_size_.push_back(na);
+        relabel(xn, fresh);
+        loop_size_[lx] = total - na;
+      } else {
+        loop_size_.push_back(nb);
+        relabel(yn, fresh);
+        loop_size_[lx] = total - nb;
+      }
+    }
+  } else {
+    // Case 4: different loops merge into one; the smaller one takes the larger one's id.
+    ++stats_.glue[3];
+    const int keep = loop_size_[lx] >= loop_size_[ly] ? lx : ly;
+    const int drop = keep == lx ? ly : lx;
+    relabel(keep == lx ? y : x, keep);
+    const int xn = X.next, xp = X.prev, yn = Y.next, yp = Y.prev;
+    edges_[xp].next = yn;
+    edges_[yn].prev = xp;
+    edges_[yp].next = xn;
+    edges_[xn].prev = yp;
+    loop_size_[keep] += loop_size_[drop] - 2;
+    loop_size_[drop] = 0;
+  }
+  removeEdge(x);
+  removeEdge(y);
+}
+
+void BallPivoting::join(int e, int q, const Eigen::Vector3d& center) {
+  const Edge E = edges_[e];
+  const int i = E.a, j = E.b;
+  const int glue_iq = used_[q] ? findFront(q, i) : -1;  // front edge q -> i meets the new i -> q
+  const int glue_qj = used_[q] ? findFront(j, q) : -1;  // front edge j -> q meets the new q -> j
+  if (used_[q] && glue_iq < 0 && glue_qj < 0) ++stats_.pinches;
+
+  addFace(i, q, j);
+  removeEdge(e);
+  const int e1 = newEdge(i, q, j, center, E.loop);
+  const int e2 = newEdge(q, j, i, center, E.loop);
+  edges_[E.prev].next = e1;
+  edges_[e1].prev = E.prev;
+  edges_[e1].next = e2;
+  edges_[e2].prev = e1;
+  edges_[e2].next = E.next;
+  edges_[E.next].prev = e2;
+  ++loop_size_[E.loop];
+  if (glue_iq >= 0) glue(e1, glue_iq);
+  if (glue_qj >= 0) glue(e2, glue_qj);
+  ++stats_.joins;
+}
+
+void BallPivoting::pivotEdge(int e) {
+  ++stats_.pivots;
+  const Edge E = edges_[e];
+  const int i = E.a, j = E.b, k = E.opp;
+  const Eigen::Vector3d m = 0.5 * (p_[i] + p_[j]);
+  const double r2 = radius_ * radius_;
+  const double half2 = 0.25 * (p_[j] - p_[i]).squaredNorm();
+  if (half2 >= r2) {
+    edges_[e].state = kBoundary;
+    return;
+  }
+  const double rho = std::sqrt(r2 - half2);  // radius of the circle of ball centres around the edge
+  const Eigen::Vector3d axis = (p_[j] - p_[i]).normalized();
+  Eigen::Vector3d u = E.center - m;
+  u -= axis * axis.dot(u);
+  grid_->within(m, radius_ + rho, scratch_);
+
+  struct Candidate {
+    double angle;
+    int q;
+    Eigen::Vector3d center;
+  };
+  std::vector<Candidate> candidates;
+  candidates.reserve(scratch_.size());
+  for (uint32_t uq : scratch_) {
+    const int q = static_cast<int>(uq);
+    if (q == i || q == j || q == k) continue;
+    Eigen::Vector3d c;
+    if (!ballCenter(i, q, j, c) || !normalsAgree(i, q, j)) continue;
+    const Eigen::Vector3d v = c - m;
+    double angle = std::atan2(axis.dot(u.cross(v)), u.dot(v));  // rotation about i->j, away from k
+    if (angle < 0.0) angle = angle > -1e-9 ? 0.0 : angle + kTwoPi;
+    candidates.push_back({angle, q, c});
+  }
+  std::sort(candidates.begin(), candidates.end(), [this, &m](const Candidate& a, const Candidate& b) {
+    if (a.angle != b.angle) return a.angle < b.angle;
+    return (p_[a.q] - m).squaredNorm() < (p_[b.q] - m).squaredNorm();
+  });
+  for (const Candidate& c : candidates) {
+    if (!ballEmpty(c.center, scratch_, i, c.q, j)) continue;
+    // The valid triangle with the smallest pivot angle: it must not use a vertex inside the
+    // surface, give an edge a third triangle, or run an existing edge in the same direction.
+    const int q = c.q;
+    if (used_[q] && front_deg_[q] == 0) {
+      ++stats_.refused_interior;
+      break;
+    }
+    if (used_[q] && (edgeUsed(i, q) || edgeUsed(q, j))) {
+      ++stats_.refused_edge;
+      break;
+    }
+    join(e, q, c.center);
+    return;
+  }
+  edges_[e].state = kBoundary;
+}
+
+void BallPivoting::processActive() {
+  while (head_ < active_.size()) {
+    const int e = active_[head_++];
+    if (edges_[e].state == kActive) pivotEdge(e);
+  }
+  active_.clear();
+  head_ = 0;
+}
+
+bool BallPivoting::findSeed() {
+  const std::vector<uint32_t>& order = grid_->cellOrder();
+  const double r2 = radius_ * radius_;
+  std::vector<std::pair<double, int>> near;
+  while (seed_cursor_ < order.size()) {
+    const int v = static_cast<int>(order[seed_cursor_++]);
+    if (used_[v]) continue;
+    grid_->within(p_[v], 2.0 * radius_, scratch_);
+    near.clear();
+    for (uint32_t q : scratch_) {
+      if (static_cast<int>(q) == v || used_[q]) continue;
+      const double d2 = (p_[q] - p_[v]).squaredNorm();
+      if (d2 < 4.0 * r2) near.emplace_back(d2, static_cast<int>(q));
+    }
+    const size_t keep = std::min<size_t>(near.size(), 16);
+    std::partial_sort(near.begin(), near.begin() + keep, near.end());
+    for (size_t x = 0; x < keep; ++x)
+      for (size_t y = x + 1; y < keep; ++y) {
+        int a = near[x].second, b = near[y].second;
+        if ((p_[a] - p_[v]).cross(p_[b] - p_[v]).dot(n_[v]) < 0.0) std::swap(a, b);
+        if (!normalsAgree(v, a, b)) continue;
+        Eigen::Vector3d c;
+        if (!ballCenter(v, a, b, c) || !ballEmpty(c, scratch_, v, a, b)) continue;
+        addSeed(v, a, b, c);
+        return true;
+      }
+  }
+  return false;
+}
+
+void BallPivoting::pivot(double radius_m) {
+  if (!(radius_m > 0.0) || !std::isfinite(radius_m))
+    throw std::invalid_argument("BallPivoting: radius must be positive and finite, got " + std::to_string(radius_m));
+  if (radius_m < radius_)
+    throw std::invalid_argument("BallPivoting: radii must increase (" + std::to_string(radius_m) + " after " +
+                                std::to_string(radius_) + ")");
+  radius_ = radius_m;
+  grid_ = std::make_unique<SpatialGrid>(p_, 2.0 * radius_);
+  // Thesis 7.4: the boundary of the surface so far becomes active again for the new radius.
+  active_.clear();
+  head_ = 0;
+  for (size_t e = 0; e < edges_.size(); ++e) {
+    Edge& E = edges_[e];
+    if (E.state == kRemoved) continue;
+    if (ballCenter(E.a, E.b, E.opp, E.center)) {
+      E.state = kActive;
+      active_.push_back(static_cast<int>(e));
+    } else {
+      E.state = kBoundary;
+    }
+  }
+  seed_cursor_ = 0;
+  do processActive();
+  while (findSeed());
+  stats_.triangles = faces_.size();
+  stats_.triangles_per_radius.push_back(faces_.size());
+}
+
+TriangleMesh BallPivoting::mesh() {
+  std::vector<Eigen::Vector3i> faces = faces_;
+  stats_.dropped_triangles = dropPinchedFans(faces, p_.size());
+  stats_.triangles = faces.size();
+  TriangleMesh mesh;
+  std::vector<int> index(p_.size(), -1);
+  for (const auto& f : faces)
+    for (int k = 0; k < 3; ++k) index[f[k]] = 0;
+  stats_.used_points = 0;
+  for (size_t i = 0; i < p_.size(); ++i) {
+    if (index[i] < 0) continue;
+    index[i] = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.push_back(p_[i].cast<float>());
+    mesh.normals.push_back(n_[i].cast<float>());
+    ++stats_.used_points;
+  }
+  mesh.faces.reserve(faces.size());
+  for (const auto& f : faces) mesh.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
+  return mesh;
+}
+
+std::string BallPivoting::checkFront() const {
+  std::vector<int> count(loop_size_.size(), 0);
+  for (size_t id = 0; id < edges_.size(); ++id) {
+    const Edge& E = edges_[id];
+    if (E.state == kRemoved) continue;
+    const std::string name = "edge " + std::to_string(id) + " (" + std::to_string(E.a) + "->" + std::to_string(E.b) + ")";
+    if (E.next < 0 || E.prev < 0 || edges_[E.next].state == kRemoved || edges_[E.prev].state == kRemoved)
+      return name + ": linked to a removed edge";
+    if (edges_[E.next].prev != static_cast<int>(id) || edges_[E.prev].next != static_cast<int>(id))
+      return name + ": next/prev inconsistent";
+    if (edges_[E.next].a != E.b) return name + ": next does not start at its end";
+    if (edges_[E.next].loop != E.loop) return name + ": next in another loop";
+    if (findFront(E.a, E.b) != static_cast<int>(id)) return name + ": not in its vertex's list";
+    if (!hasDirEdge(edgeKey(E.a, E.b)) || hasDirEdge(edgeKey(E.b, E.a))) return name + ": not a boundary edge";
+    ++count[E.loop];
+  }
+  for (size_t l = 0; l < loop_size_.size(); ++l)
+    if (count[l] != loop_size_[l])
+      return "loop " + std::to_string(l) + ": size " + std::to_string(loop_size_[l]) + " but " +
+             std::to_string(count[l]) + " edges";
+  std::vector<int> deg_in(p_.size(), 0);
+  for (const Edge& E : edges_)
+    if (E.state != kRemoved) ++deg_in[E.b];
+  for (size_t v = 0; v < p_.size(); ++v) {
+    int n = 0;
+    for (int x = out_head_[v]; x >= 0; x = edges_[x].next_out) {
+      if (edges_[x].state == kRemoved) return "vertex " + std::to_string(v) + ": removed edge in its list";
+      ++n;
+    }
+    if (n != front_deg_[v] || n != deg_in[v])
+      return "vertex " + std::to_string(v) + ": " + std::to_string(n) + " edges out in its list, count " +
+             std::to_string(front_deg_[v]) + ", " + std::to_string(deg_in[v]) + " in";
+  }
+  return "";
+}
+
+TriangleMesh ballPivot(const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector3f>& normals,
+                       const std::vector<double>& radii_m, BpaStats* stats) {
+  BallPivoting bpa(points, normals);
+  for (double r : radii_m) bpa.pivot(r);
+  TriangleMesh mesh = bpa.mesh();
+  if (stats) *stats = bpa.stats();
+  return mesh;
+}
+
+}  // namespace mesher
+}  // namespace scanstop
