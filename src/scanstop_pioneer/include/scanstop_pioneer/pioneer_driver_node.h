@@ -1,0 +1,50 @@
+#pragma once
+/// pioneer_driver wires the PioneerDriver core to ROS: base/rotate and base/forward (the same
+/// services as sim_node), odom + tf odom -> base_link from every accepted SIP, battery, stall and
+/// bumper state, diagnostics, and cmd_vel teleoperation with a command timeout.
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/Twist.h>
+#include <ros/ros.h>
+#include <scanstop_msgs/Forward.h>
+#include <scanstop_msgs/Rotate.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <memory>
+#include <string>
+
+#include "scanstop_pioneer/pioneer_driver.h"
+
+namespace scanstop {
+namespace pioneer {
+
+class PioneerDriverNode {
+ public:
+  /// Reads and validates the parameters (ConfigError naming the parameter) and starts the driver.
+  PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  ~PioneerDriverNode();
+
+  /// Fills a DriverConfig from the private parameters (defaults = the struct's defaults).
+  static DriverConfig readParameters(const ros::NodeHandle& pnh);
+
+ private:
+  void onSip(const DriverStatus& status);
+  void onCmdVel(const geometry_msgs::Twist::ConstPtr& msg);
+  bool onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res);
+  bool onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  void onTimer(const ros::WallTimerEvent&);
+
+  std::unique_ptr<PioneerDriver> driver_;
+  std::string odom_frame_ = "odom", base_frame_ = "base_link";
+  bool publish_tf_ = true;
+  ros::Publisher odom_pub_, battery_pub_, stall_pub_, bumper_pub_;
+  ros::Subscriber cmd_vel_sub_;
+  ros::ServiceServer rotate_srv_, forward_srv_;
+  tf2_ros::TransformBroadcaster tf_;
+  diagnostic_updater::Updater updater_;
+  ros::WallTimer timer_;
+};
+
+}  // namespace pioneer
+}  // namespace scanstop

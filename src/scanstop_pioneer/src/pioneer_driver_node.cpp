@@ -1,0 +1,212 @@
+#include "scanstop_pioneer/pioneer_driver_node.h"
+
+#include <nav_msgs/Odometry.h>
+#include <sensor_msgs/BatteryState.h>
+#include <std_msgs/Bool.h>
+
+#include <cmath>
+
+#include "scanstop_common/error.h"
+#include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/params.h"
+
+namespace scanstop {
+namespace pioneer {
+namespace {
+
+template <typename T>
+void opt(const ros::NodeHandle& pnh, const std::string& name, T& value) {
+  ros_params::optional(pnh, name, value);
+}
+
+}  // namespace
+
+DriverConfig PioneerDriverNode::readParameters(const ros::NodeHandle& pnh) {
+  DriverConfig c;
+  c.port = ros_params::require<std::string>(pnh, "port");
+  opt(pnh, "baud", c.baud);
+  RobotParams& r = c.robot;
+  opt(pnh, "robot/subclass", r.subclass);
+  opt(pnh, "robot/angle_conv", r.angle_conv_rad);
+  opt(pnh, "robot/dist_conv", r.dist_conv_mm);
+  opt(pnh, "robot/vel_conv", r.vel_conv);
+  opt(pnh, "robot/range_conv", r.range_conv_mm);
+  opt(pnh, "robot/diff_conv", r.diff_conv);
+  opt(pnh, "robot/max_velocity", r.max_velocity_mps);
+  opt(pnh, "robot/max_rot_velocity", r.max_rot_velocity_radps);
+  opt(pnh, "reply_timeout", c.client.reply_timeout_s);
+  opt(pnh, "sync_attempts", c.client.sync_attempts);
+  opt(pnh, "close_wait", c.client.close_wait_s);
+  opt(pnh, "sip_timeout", c.sip_timeout_s);
+  opt(pnh, "reconnect_period", c.reconnect_period_s);
+  opt(pnh, "pulse_period", c.pulse_period_s);
+  opt(pnh, "cmd_vel_timeout", c.cmd_vel_timeout_s);
+  opt(pnh, "max_linear_speed", c.max_linear_speed_mps);
+  opt(pnh, "max_angular_speed", c.max_angular_speed_radps);
+  MotionConfig& m = c.motion;
+  opt(pnh, "motion/linear_speed", m.linear_speed_mps);
+  opt(pnh, "motion/angular_speed", m.angular_speed_radps);
+  opt(pnh, "motion/min_linear_speed", m.min_linear_speed_mps);
+  opt(pnh, "motion/min_angular_speed", m.min_angular_speed_radps);
+  opt(pnh, "motion/linear_decel", m.linear_decel_mps2);
+  opt(pnh, "motion/angular_decel", m.angular_decel_radps2);
+  opt(pnh, "motion/distance_tolerance", m.distance_tolerance_m);
+  opt(pnh, "motion/angle_tolerance", m.angle_tolerance_rad);
+  opt(pnh, "motion/timeout_factor", m.timeout_factor);
+  opt(pnh, "motion/timeout_extra", m.timeout_extra_s);
+  opt(pnh, "motion/stall_time", m.stall_time_s);
+  opt(pnh, "motion/motors_disabled_time", m.motors_disabled_time_s);
+  opt(pnh, "motion/settle_timeout", m.settle_timeout_s);
+  opt(pnh, "motion/max_forward", m.max_forward_m);
+  opt(pnh, "motion/max_rotate", m.max_rotate_rad);
+  try {
+    c.validate();
+  } catch (const ConfigError& e) {
+    throw ConfigError(std::string(e.what()) + " (private namespace " + pnh.getNamespace() + ")");
+  }
+  return c;
+}
+
+PioneerDriverNode::PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : updater_(nh, pnh) {
+  const DriverConfig config = readParameters(pnh);
+  opt(pnh, "odom_frame", odom_frame_);
+  opt(pnh, "base_frame", base_frame_);
+  opt(pnh, "publish_tf", publish_tf_);
+  if (odom_frame_.empty() || base_frame_.empty() || odom_frame_ == base_frame_)
+    throw ConfigError("parameters '" + pnh.resolveName("odom_frame") + "' and '" + pnh.resolveName("base_frame") +
+                      "' must be non-empty and differ");
+
+  odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 20);
+  battery_pub_ = nh.advertise<sensor_msgs::BatteryState>("battery", 5);
+  stall_pub_ = nh.advertise<std_msgs::Bool>("base/stall", 5, true);
+  bumper_pub_ = nh.advertise<std_msgs::Bool>("base/bumper", 5, true);
+
+  driver_ = std::make_unique<PioneerDriver>(config);
+  driver_->setLogCallback([](int level, const std::string& text) {
+    if (level == 0) ROS_INFO("pioneer_driver: %s", text.c_str());
+    else if (level == 1) ROS_WARN("pioneer_driver: %s", text.c_str());
+    else ROS_ERROR("pioneer_driver: %s", text.c_str());
+  });
+  driver_->setSipCallback([this](const DriverStatus& s) { onSip(s); });
+
+  updater_.setHardwareID("pioneer@" + config.port);
+  updater_.add("Pioneer base", this, &PioneerDriverNode::diagnose);
+  cmd_vel_sub_ = nh.subscribe("cmd_vel", 5, &PioneerDriverNode::onCmdVel, this);
+  rotate_srv_ = nh.advertiseService("base/rotate", &PioneerDriverNode::onRotate, this);
+  forward_srv_ = nh.advertiseService("base/forward", &PioneerDriverNode::onForward, this);
+  timer_ = nh.createWallTimer(ros::WallDuration(1.0), &PioneerDriverNode::onTimer, this);
+  ROS_INFO("pioneer_driver: port %s at %d baud, robot subclass %s", config.port.c_str(), config.baud,
+           config.robot.subclass.c_str());
+  driver_->start();
+}
+
+PioneerDriverNode::~PioneerDriverNode() {
+  if (driver_) driver_->stop();
+}
+
+void PioneerDriverNode::onSip(const DriverStatus& s) {
+  if (!s.odom.isFinite() || !std::isfinite(s.v_mps) || !std::isfinite(s.w_radps)) return;
+  const ros::Time stamp = ros::Time::now();
+  nav_msgs::Odometry odom;
+  odom.header.stamp = stamp;
+  odom.header.frame_id = odom_frame_;
+  odom.child_frame_id = base_frame_;
+  odom.pose.pose = ros_conv::toPoseMsg(s.odom);
+  odom.twist.twist.linear.x = s.v_mps;
+  odom.twist.twist.angular.z = s.w_radps;
+  odom_pub_.publish(odom);
+  if (publish_tf_) tf_.sendTransform(ros_conv::toTransformMsg(s.odom, odom_frame_, base_frame_, stamp));
+  std_msgs::Bool stall, bumper;
+  stall.data = s.sip.stalled();
+  bumper.data = s.sip.frontBumpers() != 0 || s.sip.rearBumpers() != 0;
+  stall_pub_.publish(stall);
+  bumper_pub_.publish(bumper);
+}
+
+void PioneerDriverNode::onTimer(const ros::WallTimerEvent&) {
+  updater_.force_update();
+  const DriverStatus s = driver_->status();
+  if (s.link != LinkState::kConnected || !s.have_sip) return;
+  sensor_msgs::BatteryState battery;
+  battery.header.stamp = ros::Time::now();
+  battery.header.frame_id = base_frame_;
+  battery.voltage = static_cast<float>(s.sip.batteryVolts());
+  battery.current = battery.charge = battery.capacity = battery.design_capacity = battery.percentage = NAN;
+  battery.power_supply_status = sensor_msgs::BatteryState::POWER_SUPPLY_STATUS_UNKNOWN;
+  battery.power_supply_health = sensor_msgs::BatteryState::POWER_SUPPLY_HEALTH_UNKNOWN;
+  battery.power_supply_technology = sensor_msgs::BatteryState::POWER_SUPPLY_TECHNOLOGY_UNKNOWN;
+  battery.present = true;
+  battery_pub_.publish(battery);
+}
+
+void PioneerDriverNode::onCmdVel(const geometry_msgs::Twist::ConstPtr& msg) {
+  std::string reason;
+  if (!driver_->commandVelocity(msg->linear.x, msg->angular.z, &reason))
+    ROS_WARN_THROTTLE(2.0, "pioneer_driver: cmd_vel ignored: %s", reason.c_str());
+}
+
+bool PioneerDriverNode::onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res) {
+  const MotionResult r = driver_->rotate(req.angle_rad);
+  res.success = r.success;
+  res.message = r.message;
+  res.duration_s = r.duration_s;
+  res.achieved_angle_rad = r.achieved;
+  res.collision = r.collision;
+  res.odom_pose = ros_conv::toPoseStamped(r.odom, odom_frame_, ros::Time::now());
+  if (!r.success) ROS_WARN("pioneer_driver: rotate %.3f rad failed: %s", req.angle_rad, r.message.c_str());
+  return true;
+}
+
+bool PioneerDriverNode::onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res) {
+  const MotionResult r = driver_->forward(req.distance_m);
+  res.success = r.success;
+  res.message = r.message;
+  res.duration_s = r.duration_s;
+  res.achieved_distance_m = r.achieved;
+  res.collision = r.collision;
+  res.odom_pose = ros_conv::toPoseStamped(r.odom, odom_frame_, ros::Time::now());
+  if (!r.success) ROS_WARN("pioneer_driver: forward %.3f m failed: %s", req.distance_m, r.message.c_str());
+  return true;
+}
+
+void PioneerDriverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  const DriverStatus s = driver_->status();
+  using diagnostic_msgs::DiagnosticStatus;
+  if (s.link != LinkState::kConnected) {
+    stat.summary(DiagnosticStatus::ERROR, "not connected: " + (s.last_error.empty() ? "connecting" : s.last_error));
+  } else if (!s.have_sip) {
+    stat.summary(DiagnosticStatus::WARN, "connected, waiting for the first SIP");
+  } else if (s.sip.stalled() || s.sip.frontBumpers() || s.sip.rearBumpers()) {
+    stat.summary(DiagnosticStatus::WARN, s.sip.stalled() ? "wheel stall" : "bumper pressed");
+  } else if (!s.sip.motorsEnabled()) {
+    stat.summary(DiagnosticStatus::WARN, "motors disabled");
+  } else {
+    stat.summary(DiagnosticStatus::OK, "connected");
+  }
+  stat.add("port", s.port);
+  stat.add("link", s.link == LinkState::kConnected ? "connected" : "disconnected");
+  stat.add("robot", s.robot.name + " (" + s.robot.robot_class + " " + s.robot.subclass + ")");
+  stat.add("last error", s.last_error);
+  stat.add("last connect", s.connect_note);
+  stat.add("connects", s.connects);
+  stat.add("recoveries (session still open)", s.recoveries);
+  stat.add("link losses", s.link_losses);
+  stat.add("SIPs", s.sips);
+  stat.add("checksum errors", s.checksum_errors);
+  stat.add("bad count bytes", s.bad_counts);
+  stat.add("skipped bytes", s.skipped_bytes);
+  stat.add("SIP decode errors", s.sip_decode_errors);
+  stat.add("cmd_vel timeouts", s.cmd_vel_timeouts);
+  stat.add("motion active", s.motion_active);
+  if (s.have_sip) {
+    stat.add("battery [V]", s.sip.batteryVolts());
+    stat.add("motors enabled", s.sip.motorsEnabled());
+    stat.add("left wheel stall", s.sip.leftStall());
+    stat.add("right wheel stall", s.sip.rightStall());
+    stat.addf("front bumpers", "0x%02X", s.sip.frontBumpers());
+    stat.addf("rear bumpers", "0x%02X", s.sip.rearBumpers());
+  }
+}
+
+}  // namespace pioneer
+}  // namespace scanstop

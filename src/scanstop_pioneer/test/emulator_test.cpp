@@ -1,0 +1,220 @@
+// The emulator's protocol behaviour (time-driven, no pty) and the driver core against the emulator
+// on a real pseudo-terminal: handshake, recovery of a session still open, motions, cmd_vel timeout.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "scanstop_pioneer/p2os_client.h"
+#include "scanstop_pioneer/pioneer_driver.h"
+#include "scanstop_pioneer/pty_emulator.h"
+#include "scanstop_pioneer/robot_emulator.h"
+
+namespace {
+
+using namespace scanstop::pioneer;
+using Bytes = std::vector<uint8_t>;
+
+std::vector<Bytes> packets(RobotEmulator& emu) {
+  PacketParser parser;
+  const Bytes out = emu.takeOutput();
+  parser.feed(out.data(), out.size());
+  std::vector<Bytes> result;
+  Bytes p;
+  while (parser.next(p)) result.push_back(p);
+  return result;
+}
+
+void send(RobotEmulator& emu, const Bytes& packet, double t) { emu.receive(packet.data(), packet.size(), t); }
+
+TEST(Emulator, SyncStateMachineOpenEnableAndSips) {
+  RobotEmulator emu{EmulatorConfig()};
+  send(emu, commandPacket(cmd::kSync1), 0.0);  // out of order: ignored
+  EXPECT_TRUE(packets(emu).empty());
+  send(emu, commandPacket(cmd::kSync0), 0.0);
+  EXPECT_EQ(packets(emu), std::vector<Bytes>{Bytes{0x00}});
+  send(emu, commandPacket(cmd::kSync1), 0.0);
+  EXPECT_EQ(packets(emu), std::vector<Bytes>{Bytes{0x01}});
+  send(emu, commandPacket(cmd::kSync2), 0.0);
+  auto reply = packets(emu);
+  ASSERT_EQ(reply.size(), 1u);
+  SyncInfo info;
+  ASSERT_TRUE(decodeSync2Reply(reply[0].data(), reply[0].size(), info));
+  EXPECT_EQ(info.subclass, "p2dx");
+  EXPECT_EQ(emu.state(), EmulatorState::kConnected);
+  send(emu, commandPacket(cmd::kOpen), 0.0);
+  EXPECT_EQ(emu.state(), EmulatorState::kOpen);
+  // Ten SIPs per second; motors disabled until ENABLE 1.
+  send(emu, commandPacket(cmd::kVel, 200), 0.0);
+  for (int i = 0; i <= 10; ++i) emu.advance(0.1 * i);
+  auto sips = packets(emu);
+  EXPECT_EQ(sips.size(), 11u);
+  Sip sip;
+  ASSERT_TRUE(decodeSip(sips.back().data(), sips.back().size(), sip));
+  EXPECT_FALSE(sip.motorsEnabled());
+  EXPECT_EQ(sip.x, 0);
+  send(emu, commandPacket(cmd::kEnable, 1), 1.0);
+  for (int i = 11; i <= 30; ++i) {
+    send(emu, commandPacket(cmd::kPulse), 0.1 * i);
+    emu.advance(0.1 * i);
+  }
+  sips = packets(emu);
+  ASSERT_TRUE(decodeSip(sips.back().data(), sips.back().size(), sip));
+  EXPECT_TRUE(sip.motorsEnabled());
+  EXPECT_TRUE(sip.moving());
+  EXPECT_EQ(sip.left_vel, 200);
+  EXPECT_GT(emu.truePose().x, 0.2);
+  EXPECT_NEAR(sip.x * 0.84e-3, emu.truePose().x, 1e-3);
+  // CLOSE: back to WAIT, no more SIPs.
+  send(emu, commandPacket(cmd::kClose), 3.0);
+  emu.advance(3.5);
+  EXPECT_EQ(emu.state(), EmulatorState::kWait);
+  EXPECT_TRUE(packets(emu).empty());
+}
+
+TEST(Emulator, WatchdogStopsTheDrivesAndResumes) {
+  RobotEmulator emu{EmulatorConfig()};
+  emu.leaveOpen(0.0);
+  send(emu, commandPacket(cmd::kVel, 300), 0.0);
+  for (int i = 1; i <= 40; ++i) emu.advance(0.05 * i);  // 2 s of silence from the client
+  EXPECT_NEAR(emu.linearVelocity(), 0.3, 1e-9);
+  for (int i = 41; i <= 80; ++i) emu.advance(0.05 * i);
+  EXPECT_TRUE(emu.watchdogTripped());
+  EXPECT_NEAR(emu.linearVelocity(), 0.0, 1e-9);
+  send(emu, commandPacket(cmd::kPulse), 4.0);
+  for (int i = 81; i <= 100; ++i) emu.advance(0.05 * i);
+  EXPECT_FALSE(emu.watchdogTripped());
+  EXPECT_NEAR(emu.linearVelocity(), 0.3, 1e-9);  // resumes the last setpoint
+}
+
+TEST(Emulator, FaultsCorruptDropAndStall) {
+  RobotEmulator emu{EmulatorConfig()};
+  emu.leaveOpen(0.0);
+  emu.command("corrupt 2", 0.0);
+  emu.command("drop 1", 0.0);
+  emu.command("stall on", 0.0);
+  EXPECT_THROW(emu.command("stall maybe", 0.0), std::invalid_argument);
+  EXPECT_THROW(emu.command("explode", 0.0), std::invalid_argument);
+  send(emu, commandPacket(cmd::kVel, 200), 0.0);
+  for (int i = 0; i <= 9; ++i) emu.advance(0.1 * i);
+  PacketParser parser;
+  const Bytes out = emu.takeOutput();
+  parser.feed(out.data(), out.size());
+  Bytes p;
+  int good = 0;
+  Sip sip;
+  while (parser.next(p)) {
+    ++good;
+    ASSERT_TRUE(decodeSip(p.data(), p.size(), sip));
+  }
+  EXPECT_EQ(good, 8);  // 10 SIPs; the first corrupted and shortened, the second corrupted
+  EXPECT_GE(parser.stats().checksum_errors, 2u);
+  EXPECT_TRUE(sip.leftStall());
+  EXPECT_TRUE(sip.rightStall());
+  EXPECT_EQ(emu.truePose().x, 0.0);
+}
+
+TEST(Client, HandshakeAndRecoveryOverAPty) {
+  PtyEmulator emu(EmulatorConfig(), "");
+  emu.start();
+  SerialPort port;
+  port.open(emu.devicePath(), 9600);
+  ClientConfig cc;
+  P2osClient client(port, cc);
+  const SyncInfo info = client.connect();
+  EXPECT_EQ(info.name, "scanstop-emulator");
+  EXPECT_EQ(client.recoveries(), 0u);
+  Bytes payload;
+  ASSERT_TRUE(client.receive(payload, 1.0));
+  Sip sip;
+  ASSERT_TRUE(decodeSip(payload.data(), payload.size(), sip));
+  // A second client meets the session still open (the first one vanished without CLOSE).
+  port.close();
+  SerialPort port2;
+  port2.open(emu.devicePath(), 9600);
+  P2osClient client2(port2, cc);
+  client2.connect();
+  EXPECT_EQ(client2.recoveries(), 1u);
+  EXPECT_NE(client2.lastConnectNote().find("still open"), std::string::npos);
+  EXPECT_EQ(emu.with([](RobotEmulator& e) { return e.sessionsOpened(); }), 2u);
+  // A client that died after SYNC2 (robot CONNECTED, where 0 means PULSE): no echo, CLOSE, retry.
+  client2.close();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  port2.write(commandPacket(cmd::kSync0).data(), 6);
+  port2.write(commandPacket(cmd::kSync1).data(), 6);
+  port2.write(commandPacket(cmd::kSync2).data(), 6);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(emu.with([](RobotEmulator& e) { return e.state(); }), EmulatorState::kConnected);
+  P2osClient client3(port2, cc);
+  client3.connect();
+  EXPECT_EQ(emu.with([](RobotEmulator& e) { return e.state(); }), EmulatorState::kOpen);
+  emu.stop();
+}
+
+TEST(Client, NoRobotFailsWithAClearMessage) {
+  PtyEmulator emu(EmulatorConfig(), "");
+  emu.start();
+  emu.command("silence 30");
+  SerialPort port;
+  port.open(emu.devicePath(), 9600);
+  ClientConfig cc;
+  cc.reply_timeout_s = 0.2;
+  cc.sync_attempts = 2;
+  cc.close_wait_s = 0.05;
+  P2osClient client(port, cc);
+  try {
+    client.connect();
+    FAIL() << "expected ProtocolError";
+  } catch (const ProtocolError& e) {
+    EXPECT_NE(std::string(e.what()).find("no reply to SYNC0"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(port.open("/nonexistent/tty", 9600), LinkError);
+  emu.stop();
+}
+
+class DriverOnEmulator : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    emu_ = std::make_unique<PtyEmulator>(EmulatorConfig(), "");
+    emu_->start();
+    DriverConfig config;
+    config.port = emu_->devicePath();
+    config.reconnect_period_s = 0.2;
+    driver_ = std::make_unique<PioneerDriver>(config);
+    driver_->start();
+    for (int i = 0; i < 100 && !driver_->status().have_sip; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    ASSERT_TRUE(driver_->status().have_sip) << driver_->status().last_error;
+  }
+  void TearDown() override {
+    driver_->stop();
+    emu_->stop();
+  }
+  scanstop::Pose2D truth() { return emu_->with([](RobotEmulator& e) { return e.truePose(); }); }
+  std::unique_ptr<PtyEmulator> emu_;
+  std::unique_ptr<PioneerDriver> driver_;
+};
+
+TEST_F(DriverOnEmulator, RotateAndForwardMatchTheRobot) {
+  const MotionResult r = driver_->rotate(M_PI / 2);
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_NEAR(r.achieved, M_PI / 2, 0.02);
+  EXPECT_NEAR(truth().yaw, r.achieved, 0.005);
+  const MotionResult f = driver_->forward(0.4);
+  ASSERT_TRUE(f.success) << f.message;
+  EXPECT_NEAR(f.achieved, 0.4, 0.01);
+  EXPECT_NEAR(truth().y, 0.4, 0.01);
+  EXPECT_NEAR(f.odom.y, truth().y, 0.003);
+  EXPECT_FALSE(driver_->forward(7.0).success);  // beyond max_forward
+}
+
+TEST_F(DriverOnEmulator, CmdVelTimeoutStopsTheRobot) {
+  ASSERT_TRUE(driver_->commandVelocity(0.3, 0.0));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_GT(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.02);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // no new command: timeout 0.5 s
+  EXPECT_NEAR(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.0, 1e-9);
+  EXPECT_EQ(driver_->status().cmd_vel_timeouts, 1u);
+}
+
+}  // namespace
