@@ -1,0 +1,60 @@
+#pragma once
+/// bpa_mesher_node wires the meshing pipeline to ROS: the mesher/build_mesh service (a file or the
+/// current map directory), the mesh as rviz markers, and, for viewing a recorded run, a saved mesh
+/// and the map directory's points, path and scan poses.
+
+#include <geometry_msgs/PoseArray.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <scanstop_msgs/BuildMesh.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+
+#include <string>
+
+#include "scanstop_mesher/mesh_markers.h"
+#include "scanstop_mesher/mesher.h"
+
+namespace scanstop {
+namespace mesher {
+
+/// Node parameters (private namespace); see README.md for the table.
+struct MesherNodeConfig {
+  std::string map_dir;                 ///< map directory meshed when input_path is empty
+  std::string frame_id = "map";        ///< frame of the map, the meshes and the markers
+  std::string default_output;          ///< file written when output_path is empty ("" = required)
+  double map_voxel_m = 0.01;           ///< voxel [m] for the map when the request gives 0 (0 = none)
+  double normal_radius_m = 0.0;        ///< [m]; 0 = 3 x point spacing
+  int normal_min_neighbors = 5;
+  std::string color_mode = "height";   ///< "height" or "normal"
+  int max_triangles_per_marker = 100000;
+  std::string load_mesh;               ///< mesh (.stl/.ply) published at start ("" = none)
+  bool publish_map = false;            ///< publish map_dir's points, path, scan poses and base_link (viewing)
+  double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)
+  double map_poll_s = 2.0;             ///< period [s] of checking map_dir for new scans when publish_map
+  void validate() const;
+};
+
+class BpaMesherNode {
+ public:
+  /// Reads and validates the parameters, loads load_mesh; throws ConfigError / IoError naming the
+  /// parameter or file that is wrong.
+  BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+
+ private:
+  bool onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop_msgs::BuildMesh::Response& res);
+  void publishMesh(const TriangleMesh& mesh);
+  void onMapTimer(const ros::WallTimerEvent&);
+  void publishMapView();
+
+  MesherNodeConfig config_;
+  MeshColoring coloring_ = MeshColoring::kHeight;
+  ros::ServiceServer build_srv_;
+  ros::Publisher marker_pub_, cloud_pub_, path_pub_, poses_pub_;
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+  ros::WallTimer map_timer_;
+  std::string published_poses_;
+};
+
+}  // namespace mesher
+}  // namespace scanstop

@@ -1,0 +1,160 @@
+#include "scanstop_mesher/bpa_mesher_node.h"
+
+#include <chrono>
+#include <sstream>
+
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/map_dir.h"
+#include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/params.h"
+
+namespace scanstop {
+namespace mesher {
+
+void MesherNodeConfig::validate() const {
+  if (frame_id.empty()) throw ConfigError("parameter 'frame_id' is empty");
+  requireNonNegative("map_voxel_m", map_voxel_m, "m");
+  requireNonNegative("normal_radius_m", normal_radius_m, "m");
+  requireInRange("normal_min_neighbors", normal_min_neighbors, 3, 1000);
+  requireOneOf("color_mode", color_mode, {"height", "normal"});
+  requireInRange("max_triangles_per_marker", max_triangles_per_marker, 1, 10000000);
+  requireNonNegative("map_cloud_voxel_m", map_cloud_voxel_m, "m");
+  requirePositive("map_poll_s", map_poll_s, "s");
+  if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
+  if (!default_output.empty()) {
+    const std::string ext = fileExtension(default_output);
+    if (ext != "stl" && ext != "ply")
+      throw ConfigError("parameter 'default_output' = '" + default_output + "' must end in .stl or .ply");
+  }
+}
+
+BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
+  MesherNodeConfig& c = config_;
+  ros_params::optional(pnh, "map_dir", c.map_dir);
+  ros_params::optional(pnh, "frame_id", c.frame_id);
+  ros_params::optional(pnh, "default_output", c.default_output);
+  ros_params::optional(pnh, "map_voxel_m", c.map_voxel_m);
+  ros_params::optional(pnh, "normal_radius_m", c.normal_radius_m);
+  ros_params::optional(pnh, "normal_min_neighbors", c.normal_min_neighbors);
+  ros_params::optional(pnh, "color_mode", c.color_mode);
+  ros_params::optional(pnh, "max_triangles_per_marker", c.max_triangles_per_marker);
+  ros_params::optional(pnh, "load_mesh", c.load_mesh);
+  ros_params::optional(pnh, "publish_map", c.publish_map);
+  ros_params::optional(pnh, "map_cloud_voxel_m", c.map_cloud_voxel_m);
+  ros_params::optional(pnh, "map_poll_s", c.map_poll_s);
+  c.validate();
+  coloring_ = parseColoring(c.color_mode, "color_mode");
+
+  // Relative names: meant to be remapped / pushed into a namespace.
+  marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("mesher/mesh_markers", 1, true);
+  build_srv_ = nh.advertiseService("mesher/build_mesh", &BpaMesherNode::onBuildMesh, this);
+  if (!c.load_mesh.empty()) {
+    const TriangleMesh mesh = readMesh(c.load_mesh);
+    ROS_INFO("bpa_mesher_node: loaded %zu triangles from %s", mesh.faces.size(), c.load_mesh.c_str());
+    publishMesh(mesh);
+  }
+  if (c.publish_map) {
+    cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("slam/map_cloud", 1, true);
+    path_pub_ = nh.advertise<nav_msgs::Path>("slam/path", 1, true);
+    poses_pub_ = nh.advertise<geometry_msgs::PoseArray>("mesher/scan_poses", 1, true);
+    publishMapView();
+    map_timer_ = nh.createWallTimer(ros::WallDuration(c.map_poll_s), &BpaMesherNode::onMapTimer, this);
+  }
+}
+
+bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop_msgs::BuildMesh::Response& res) {
+  const auto t0 = std::chrono::steady_clock::now();
+  res.success = false;
+  try {
+    const std::string output = req.output_path.empty() ? config_.default_output : req.output_path;
+    if (output.empty()) throw ConfigError("output_path is empty and parameter 'default_output' is not set");
+    const std::string ext = fileExtension(output);
+    if (ext != "stl" && ext != "ply") throw ConfigError("output_path '" + output + "' must end in .stl or .ply");
+    MesherConfig mc;
+    mc.radii_m.assign(req.radii.begin(), req.radii.end());
+    mc.normal_radius_m = config_.normal_radius_m;
+    mc.normal_min_neighbors = config_.normal_min_neighbors;
+    ScanPoints points;
+    std::string source;
+    if (req.input_path.empty()) {
+      if (config_.map_dir.empty()) throw ConfigError("input_path is empty and parameter 'map_dir' is not set");
+      points = loadMapDirectory(config_.map_dir);
+      mc.voxel_m = req.voxel_m > 0 ? req.voxel_m : config_.map_voxel_m;
+      source = "map " + config_.map_dir;
+    } else {
+      points = fromCloud(readCloud(req.input_path), Eigen::Vector3f::Zero());
+      mc.voxel_m = req.voxel_m;
+      source = req.input_path;
+    }
+    const MesherResult r = buildMesh(points, mc);
+    writeMesh(output, r.mesh);
+    publishMesh(r.mesh);
+    res.success = true;
+    res.points = static_cast<uint32_t>(r.points);
+    res.triangles = static_cast<uint32_t>(r.mesh.faces.size());
+    res.file = output;
+    std::ostringstream msg;
+    msg << r.mesh.faces.size() << " triangles from " << r.points << " of " << r.input_points << " points of " << source
+        << " (radii";
+    for (double x : r.radii_m) msg << " " << x;
+    msg << " m; " << r.topology.nonmanifold_edges << " non-manifold edges, " << r.topology.nonmanifold_vertices
+        << " non-manifold vertices)";
+    res.message = msg.str();
+    ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
+  } catch (const std::exception& e) {
+    res.message = e.what();
+    ROS_ERROR("bpa_mesher_node: build_mesh failed: %s", e.what());
+  }
+  res.duration_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return true;
+}
+
+void BpaMesherNode::publishMesh(const TriangleMesh& mesh) {
+  marker_pub_.publish(meshToMarkers(mesh, config_.frame_id, ros::Time::now(), coloring_,
+                                    static_cast<size_t>(config_.max_triangles_per_marker)));
+}
+
+void BpaMesherNode::onMapTimer(const ros::WallTimerEvent&) {
+  try {
+    publishMapView();
+  } catch (const std::exception& e) {
+    ROS_WARN_THROTTLE(30.0, "bpa_mesher_node: cannot show the map: %s", e.what());
+  }
+}
+
+void BpaMesherNode::publishMapView() {
+  std::string poses;
+  try {
+    poses = readFile(config_.map_dir + "/poses.csv");
+  } catch (const IoError&) {
+    return;  // no scan yet
+  }
+  if (poses == published_poses_) return;
+  const MapDirectory map(config_.map_dir);
+  const ros::Time stamp = ros::Time::now();
+  const ScanPoints points = voxelDownsample(loadMapDirectory(config_.map_dir), config_.map_cloud_voxel_m);
+  PointCloud cloud;
+  cloud.points = points.points;
+  cloud.setUnorganized();
+  cloud_pub_.publish(ros_conv::toMsg(cloud, config_.frame_id, stamp));
+  nav_msgs::Path path;
+  geometry_msgs::PoseArray scan_poses;
+  path.header.frame_id = scan_poses.header.frame_id = config_.frame_id;
+  path.header.stamp = scan_poses.header.stamp = stamp;
+  for (const MapScanInfo& s : map.scans()) {
+    path.poses.push_back(ros_conv::toPoseStamped(s.map_pose, config_.frame_id, stamp));
+    scan_poses.poses.push_back(ros_conv::toPoseMsg(s.map_pose));
+  }
+  path_pub_.publish(path);
+  poses_pub_.publish(scan_poses);
+  // The robot where it took the last scan (nobody else publishes base_link when viewing a run).
+  static_tf_.sendTransform(ros_conv::toTransformMsg(map.scans().back().map_pose, config_.frame_id, "base_link", stamp));
+  published_poses_ = poses;
+  ROS_INFO("bpa_mesher_node: showing %zu scans, %zu map points", map.size(), cloud.size());
+}
+
+}  // namespace mesher
+}  // namespace scanstop

@@ -1,0 +1,153 @@
+// bpa_mesher_node wiring: mesher/build_mesh on the current map directory and on files, errors
+// reported in the response, the mesh as markers; the viewing instance's saved mesh and map view.
+#include <geometry_msgs/PoseArray.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <scanstop_msgs/BuildMesh.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cstdio>
+#include <functional>
+#include <string>
+
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/map_dir.h"
+#include "synthetic_room.h"
+
+using namespace scanstop;
+
+namespace {
+
+std::string g_map_dir, g_reference;
+
+size_t triangles(const visualization_msgs::MarkerArray& arr) {
+  size_t n = 0;
+  for (const auto& m : arr.markers)
+    if (m.type == visualization_msgs::Marker::TRIANGLE_LIST) n += m.points.size() / 3;
+  return n;
+}
+
+bool spinUntil(const std::function<bool()>& done, double timeout_s) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (ros::ok() && ros::WallTime::now() < end) {
+    ros::spinOnce();
+    if (done()) return true;
+    ros::WallDuration(0.02).sleep();
+  }
+  return done();
+}
+
+/// Two scans of the synthetic room from two poses, written as a map directory.
+void writeMap(const std::string& dir) {
+  MapDirectory map(dir);
+  const Pose2D poses[2] = {Pose2D(-1.0, 0.5, 0.3), Pose2D(0.5, -1.0, -2.0)};
+  for (uint32_t s = 0; s < 2; ++s) {
+    MapScanInfo info;
+    info.index = s;
+    info.map_pose = info.odom_pose = poses[s];
+    info.sensor_origin = Eigen::Vector3d(0.1, 0.0, 0.45);
+    const Eigen::Isometry3f T_map_base = poses[s].toIsometry3f();
+    PointCloud base;
+    for (const auto& p : test::scanRoom(T_map_base * info.sensor_origin.cast<float>(), 90, 180, 0.002f, s + 1))
+      base.push_back(T_map_base.inverse() * p);
+    map.append(info, base);
+  }
+}
+
+}  // namespace
+
+TEST(BpaMesherNode, BuildsMeshesOfTheMapAndOfFilesAndReportsErrors) {
+  ros::NodeHandle nh;
+  visualization_msgs::MarkerArray markers, viewer_markers;
+  bool got = false, viewer_got = false;
+  sensor_msgs::PointCloud2 map_cloud;
+  nav_msgs::Path path;
+  geometry_msgs::PoseArray scan_poses;
+  auto s1 = nh.subscribe<visualization_msgs::MarkerArray>("mesher/mesh_markers", 1, [&](const auto& m) {
+    markers = *m;
+    got = true;
+  });
+  auto s2 = nh.subscribe<visualization_msgs::MarkerArray>("viewer/mesher/mesh_markers", 1, [&](const auto& m) {
+    viewer_markers = *m;
+    viewer_got = true;
+  });
+  auto s3 = nh.subscribe<sensor_msgs::PointCloud2>("viewer/slam/map_cloud", 1, [&](const auto& m) { map_cloud = *m; });
+  auto s4 = nh.subscribe<nav_msgs::Path>("viewer/slam/path", 1, [&](const auto& m) { path = *m; });
+  auto s5 = nh.subscribe<geometry_msgs::PoseArray>("viewer/mesher/scan_poses", 1, [&](const auto& m) { scan_poses = *m; });
+
+  // The viewer shows the saved mesh right away.
+  ASSERT_TRUE(spinUntil([&] { return viewer_got; }, 20.0));
+  EXPECT_EQ(triangles(viewer_markers), readMesh(g_reference).faces.size());
+
+  ASSERT_TRUE(ros::service::waitForService("mesher/build_mesh", 30000));
+  ros::ServiceClient client = nh.serviceClient<scanstop_msgs::BuildMesh>("mesher/build_mesh");
+  scanstop_msgs::BuildMesh srv;
+  srv.request.output_path = g_map_dir + "/mesh.ply";
+  ASSERT_TRUE(client.call(srv));
+  EXPECT_FALSE(srv.response.success) << "no map yet";
+  EXPECT_NE(srv.response.message.find("poses.csv"), std::string::npos) << srv.response.message;
+
+  writeMap(g_map_dir);
+  // The viewer notices the new scans: map points, path and scan poses.
+  EXPECT_TRUE(spinUntil([&] { return map_cloud.width * map_cloud.height > 1000 && path.poses.size() == 2; }, 10.0));
+  EXPECT_EQ(map_cloud.header.frame_id, "map");
+  EXPECT_EQ(scan_poses.poses.size(), 2u);
+
+  // The current map (empty input_path), automatic radii, the node's map voxel.
+  ASSERT_TRUE(client.call(srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_GT(srv.response.triangles, 2000u);
+  EXPECT_GT(srv.response.points, 1000u);
+  EXPECT_GT(srv.response.duration_s, 0.0);
+  EXPECT_EQ(srv.response.file, g_map_dir + "/mesh.ply");
+  const TriangleMesh ply = readMesh(srv.response.file);
+  EXPECT_EQ(ply.faces.size(), srv.response.triangles);
+  EXPECT_EQ(ply.normals.size(), ply.vertices.size());
+  ASSERT_TRUE(spinUntil([&] { return got && triangles(markers) == srv.response.triangles; }, 10.0));
+  EXPECT_GT(markers.markers.size(), 2u) << "split into markers of at most 5000 triangles";
+  for (const auto& m : markers.markers)
+    if (m.type == visualization_msgs::Marker::TRIANGLE_LIST) {
+      EXPECT_LE(m.points.size(), 15000u);
+      EXPECT_EQ(m.header.frame_id, "map");
+    }
+
+  // A file as input, given radii, binary STL out.
+  const std::string cloud = g_map_dir + "/scans/scan_0000.pcd";
+  srv.request.input_path = cloud;
+  srv.request.output_path = g_map_dir + "/scan0.stl";
+  srv.request.radii = {0.08, 0.16};
+  srv.request.voxel_m = 0.06;
+  ASSERT_TRUE(client.call(srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_EQ(readMesh(g_map_dir + "/scan0.stl").faces.size(), srv.response.triangles);
+
+  // Errors come back in the response, naming what was wrong.
+  srv.request.input_path = g_map_dir + "/missing.ply";
+  ASSERT_TRUE(client.call(srv));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("missing.ply"), std::string::npos) << srv.response.message;
+  srv.request.input_path = cloud;
+  srv.request.radii = {0.2, 0.1};
+  ASSERT_TRUE(client.call(srv));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("increase"), std::string::npos) << srv.response.message;
+  srv.request.radii = {};
+  srv.request.output_path = g_map_dir + "/mesh.obj";
+  ASSERT_TRUE(client.call(srv));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find(".obj"), std::string::npos) << srv.response.message;
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "bpa_mesher_rostest");
+  ros::NodeHandle pnh("~");
+  pnh.getParam("map_dir", g_map_dir);
+  pnh.getParam("reference_mesh", g_reference);
+  const int rc = RUN_ALL_TESTS();
+  if (!g_map_dir.empty() && g_map_dir.rfind("/tmp/", 0) == 0)
+    if (std::system(("rm -rf '" + g_map_dir + "'").c_str()) != 0) std::perror("rm");
+  return rc;
+}
