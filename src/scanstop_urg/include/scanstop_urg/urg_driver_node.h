@@ -1,0 +1,56 @@
+#pragma once
+/// rotating_urg_driver wires the UrgDriver to ROS: the scanner/take_scan service (the same as
+/// sim_node's), scanner/last_scan, scanner/progress, the static base_link -> laser transform,
+/// diagnostics and the reconnect timer.
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <ros/ros.h>
+#include <scanstop_msgs/TakeScan.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "scanstop_urg/driver.h"
+
+namespace scanstop {
+namespace urg {
+
+/// Reads every parameter of the node (see README) into a DriverConfig; throws ConfigError naming
+/// the parameter that is wrong.
+DriverConfig readDriverConfig(const ros::NodeHandle& pnh);
+
+class UrgDriverNode {
+ public:
+  /// Reads and validates the parameters; throws ConfigError. The device may be absent: the node
+  /// keeps trying to connect.
+  UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+
+ private:
+  bool onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res);
+  void onReconnectTimer(const ros::WallTimerEvent&);
+  void onDiagnosticsTimer(const ros::WallTimerEvent&);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  /// The odometry pose of base_link now; false (with `error`) when tf does not have it.
+  bool odomPose(geometry_msgs::PoseStamped* pose, std::string* error);
+
+  std::unique_ptr<UrgDriver> driver_;
+  std::mutex device_mutex_;  ///< one scan or connection attempt at a time
+  std::string base_frame_ = "base_link", laser_frame_ = "laser", odom_frame_ = "odom";
+  double odom_timeout_s_ = 0.5;
+  bool require_odom_ = true;
+  bool was_connected_ = false;
+  ros::ServiceServer take_scan_srv_;
+  ros::Publisher scan_pub_, progress_pub_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+  diagnostic_updater::Updater diagnostics_;
+  ros::WallTimer reconnect_timer_, diagnostics_timer_;
+};
+
+}  // namespace urg
+}  // namespace scanstop

@@ -1,0 +1,205 @@
+#include "scanstop_urg/urg_driver_node.h"
+
+#include <scanstop_msgs/Progress.h>
+
+#include "scanstop_common/error.h"
+#include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/params.h"
+
+namespace scanstop {
+namespace urg {
+
+DriverConfig readDriverConfig(const ros::NodeHandle& pnh) {
+  DriverConfig c;
+  ros_params::optional(pnh, "port", c.urg_port);
+  ros_params::optional(pnh, "baud", c.urg_baud);
+  ros_params::optional(pnh, "reply_timeout", c.urg.reply_timeout_s);
+  ros_params::optional(pnh, "scan_timeout", c.urg.scan_timeout_s);
+  ros_params::optional(pnh, "platform/port", c.platform_port);
+  ros_params::optional(pnh, "platform/baud", c.platform_baud);
+  ros_params::optional(pnh, "platform/reply_timeout", c.stepper.reply_timeout_s);
+  ros_params::optional(pnh, "platform/home_timeout", c.stepper.home_timeout_s);
+  ros_params::optional(pnh, "platform/retries", c.stepper.retries);
+  std::string platform_type = "stepper";
+  ros_params::optional(pnh, "platform/type", platform_type);
+  if (platform_type != "stepper")
+    throw ConfigError("parameter '" + pnh.resolveName("platform/type") + "' = '" + platform_type +
+                      "': only 'stepper' is implemented");
+  ScanGeometry& g = c.scanner.geometry;
+  ros_params::optional(pnh, "scanner/height", g.height_m);
+  ros_params::optional(pnh, "scanner/x_offset", g.x_offset_m);
+  ros_params::optional(pnh, "scanner/mount_offset", g.mount_offset_m);
+  ros_params::optional(pnh, "scanner/first_step", g.first_step);
+  ros_params::optional(pnh, "scanner/last_step", g.last_step);
+  ros_params::optional(pnh, "scanner/min_range", g.min_range_m);
+  ros_params::optional(pnh, "scanner/max_range", g.max_range_m);
+  c.urg.first_step = g.first_step;
+  c.urg.last_step = g.last_step;
+  ros_params::optional(pnh, "max_plane_retries", c.scanner.max_plane_retries);
+  ros_params::optional(pnh, "max_consecutive_dropped", c.scanner.max_consecutive_dropped);
+  ros_params::optional(pnh, "settle_time", c.scanner.settle_time_s);
+  ros_params::optional(pnh, "outlier_filter", c.scanner.outlier_filter);
+  ros_params::optional(pnh, "outlier_tolerance_abs", c.scanner.filter.tolerance_abs_m);
+  ros_params::optional(pnh, "outlier_tolerance_rel", c.scanner.filter.tolerance_rel);
+  try {
+    c.validate();
+  } catch (const ConfigError& e) {
+    throw ConfigError(std::string("parameters of ") + pnh.getNamespace() + ": " + e.what());
+  }
+  return c;
+}
+
+UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
+  const DriverConfig config = readDriverConfig(pnh);
+  double reconnect_interval = 1.0, diagnostic_period = 1.0;
+  ros_params::optional(pnh, "reconnect_interval", reconnect_interval);
+  ros_params::optional(pnh, "diagnostic_period", diagnostic_period);
+  ros_params::optional(pnh, "odom_timeout", odom_timeout_s_);
+  ros_params::optional(pnh, "require_odom", require_odom_);
+  ros_params::optional(pnh, "base_frame", base_frame_);
+  ros_params::optional(pnh, "laser_frame", laser_frame_);
+  ros_params::optional(pnh, "odom_frame", odom_frame_);
+  if (!(reconnect_interval >= 0.05 && reconnect_interval <= 600.0))
+    throw ConfigError("parameter '" + pnh.resolveName("reconnect_interval") + "' = " +
+                      std::to_string(reconnect_interval) + " s must be in [0.05, 600]");
+  if (!(diagnostic_period >= 0.05 && diagnostic_period <= 600.0))
+    throw ConfigError("parameter '" + pnh.resolveName("diagnostic_period") + "' = " +
+                      std::to_string(diagnostic_period) + " s must be in [0.05, 600]");
+  if (!(odom_timeout_s_ >= 0.0 && odom_timeout_s_ <= 60.0))
+    throw ConfigError("parameter '" + pnh.resolveName("odom_timeout") + "' = " + std::to_string(odom_timeout_s_) +
+                      " s must be in [0, 60]");
+  if (base_frame_.empty() || laser_frame_.empty() || odom_frame_.empty())
+    throw ConfigError("the frame parameters base_frame, laser_frame and odom_frame must not be empty");
+  driver_ = std::make_unique<UrgDriver>(config);
+
+  Eigen::Isometry3d T_base_laser = Eigen::Isometry3d::Identity();
+  T_base_laser.translation() = Eigen::Vector3d(config.scanner.geometry.x_offset_m, 0.0, config.scanner.geometry.height_m);
+  static_tf_.sendTransform(ros_conv::toTransformMsg(T_base_laser, base_frame_, laser_frame_, ros::Time::now()));
+
+  diagnostics_.setHardwareID("URG-04LX on " + config.urg_port + ", platform on " + config.platform_port);
+  diagnostics_.add("rotating URG", this, &UrgDriverNode::diagnose);
+
+  scan_pub_ = nh.advertise<sensor_msgs::PointCloud2>("scanner/last_scan", 1, true);
+  progress_pub_ = nh.advertise<scanstop_msgs::Progress>("scanner/progress", 10);
+  take_scan_srv_ = nh.advertiseService("scanner/take_scan", &UrgDriverNode::onTakeScan, this);
+  reconnect_timer_ = nh.createWallTimer(ros::WallDuration(reconnect_interval), &UrgDriverNode::onReconnectTimer, this);
+  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(diagnostic_period), &UrgDriverNode::onDiagnosticsTimer, this);
+  ROS_INFO("rotating_urg_driver: URG on %s, platform on %s; connecting", config.urg_port.c_str(),
+           config.platform_port.c_str());
+}
+
+void UrgDriverNode::onReconnectTimer(const ros::WallTimerEvent&) {
+  std::unique_lock<std::mutex> lock(device_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;  // a scan is running
+  const bool ok = driver_->connected() ? driver_->checkLink() || driver_->connect() : driver_->connect();
+  if (ok != was_connected_) {
+    const DriverStats s = driver_->stats();
+    if (ok)
+      ROS_INFO("rotating_urg_driver: %s", s.state.c_str());
+    else
+      ROS_WARN("rotating_urg_driver: %s", s.state.c_str());
+  }
+  was_connected_ = ok;
+}
+
+void UrgDriverNode::onDiagnosticsTimer(const ros::WallTimerEvent&) { diagnostics_.force_update(); }
+
+void UrgDriverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const DriverStats s = driver_->stats();
+  if (s.connected)
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, s.state);
+  else
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, s.state);
+  status.add("connected", s.connected);
+  status.add("connects", s.connects);
+  status.add("connection losses", s.connection_losses);
+  status.add("scans", s.scans_ok);
+  status.add("failed scans", s.scans_failed);
+  status.add("checksum errors", s.checksum_errors);
+  status.add("malformed replies", s.format_errors);
+  status.add("timeouts", s.timeouts);
+  status.add("skipped lines", s.skipped_lines);
+  status.add("SCIP 1.1 switches", s.scip11_switches);
+  status.add("plane re-reads", s.plane_retries);
+  status.add("dropped planes", s.planes_dropped);
+  status.add("outliers removed", s.outliers_removed);
+  status.add("outlier share (last scan)", s.last_outlier_share);
+  status.add("outlier share (all scans)",
+             s.points_before_filter ? static_cast<double>(s.outliers_removed) / s.points_before_filter : 0.0);
+  status.add("last error", s.last_error);
+}
+
+bool UrgDriverNode::odomPose(geometry_msgs::PoseStamped* pose, std::string* error) {
+  try {
+    const geometry_msgs::TransformStamped T =
+        tf_buffer_.lookupTransform(odom_frame_, base_frame_, ros::Time(0), ros::Duration(odom_timeout_s_));
+    pose->header = T.header;
+    pose->pose.position.x = T.transform.translation.x;
+    pose->pose.position.y = T.transform.translation.y;
+    pose->pose.position.z = T.transform.translation.z;
+    pose->pose.orientation = T.transform.rotation;
+    return true;
+  } catch (const tf2::TransformException& e) {
+    *error = e.what();
+    return false;
+  }
+}
+
+bool UrgDriverNode::onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res) {
+  if (req.planes != 50 && req.planes != 100 && req.planes != 200 && req.planes != 400) {
+    res.success = false;
+    res.message = "planes = " + std::to_string(req.planes) + " is not one of 50, 100, 200, 400";
+    return true;
+  }
+  std::lock_guard<std::mutex> lock(device_mutex_);
+  // The robot stands still during the scan: its odometry pose now is the pose of the scan.
+  std::string tf_error;
+  if (!odomPose(&res.odom_pose, &tf_error)) {
+    if (require_odom_) {
+      res.success = false;
+      res.message = "no odometry pose (" + odom_frame_ + " -> " + base_frame_ + " not in tf within " +
+                    std::to_string(odom_timeout_s_) + " s: " + tf_error + "); is the base driver running?";
+      return true;
+    }
+    res.odom_pose = geometry_msgs::PoseStamped();
+    res.odom_pose.header.frame_id = odom_frame_;
+    res.odom_pose.header.stamp = ros::Time::now();
+    res.odom_pose.pose.orientation.w = 1.0;
+  }
+  scanstop_msgs::Progress progress;
+  progress.header.stamp = ros::Time::now();
+  progress.step = "take_scan";
+  progress.total = req.planes;
+  progress.message = "scanning " + std::to_string(req.planes) + " planes";
+  progress_pub_.publish(progress);
+  const ScanResult scan = driver_->takeScan(req.planes, [&](int done, int total) {
+    if (done % 10 != 0 && done != total) return;
+    progress.header.stamp = ros::Time::now();
+    progress.done = static_cast<uint32_t>(done);
+    progress.message = "plane " + std::to_string(done) + " of " + std::to_string(total);
+    progress_pub_.publish(progress);
+  });
+  was_connected_ = driver_->connected();
+  res.duration_s = scan.duration_s;
+  res.counts.raw_points = scan.raw_points;
+  res.counts.valid_points = scan.valid_points;
+  res.counts.planes_dropped = scan.planes_dropped;
+  res.counts.outliers_removed = scan.outliers_removed;
+  res.success = scan.success;
+  res.message = scan.message;
+  progress.header.stamp = ros::Time::now();
+  progress.message = scan.message;
+  progress_pub_.publish(progress);
+  if (!scan.success) {
+    ROS_WARN("rotating_urg_driver: scan failed: %s", scan.message.c_str());
+    return true;  // no cloud: a failed scan is never published
+  }
+  res.cloud = ros_conv::toMsg(scan.cloud, base_frame_, ros::Time::now());
+  scan_pub_.publish(res.cloud);
+  ROS_INFO("rotating_urg_driver: %s in %.1f s", scan.message.c_str(), scan.duration_s);
+  return true;
+}
+
+}  // namespace urg
+}  // namespace scanstop

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Bounded libFuzzer run of the SCIP parser as a test: run_fuzz.sh FUZZER SECONDS RESULT_XML SEED_DIR WORK_DIR
+# Writes a JUnit result (one test case) and fails on any crash, sanitizer report, leak or hang.
+set -uo pipefail
+fuzzer=$1 seconds=$2 xml=$3 seeds=$4 work=$5
+mkdir -p "$(dirname "$xml")" "$work"
+log="$work/fuzz.log"
+write_xml() {  # ok(0/1) message
+  {
+    echo '<?xml version="1.0" encoding="UTF-8"?>'
+    echo "<testsuite name=\"fuzz\" tests=\"1\" failures=\"$((1 - $1))\" errors=\"0\">"
+    echo "  <testcase classname=\"fuzz\" name=\"scip_parser\">"
+    if [[ $1 -eq 0 ]]; then
+      echo "    <failure message=\"$2\"><![CDATA["
+      tail -c 20000 "$log" 2>/dev/null | sed 's/]]>/]] >/g'
+      echo "]]></failure>"
+    fi
+    echo "  </testcase>"
+    echo "</testsuite>"
+  } > "$xml"
+}
+if [[ ! -x "$fuzzer" ]]; then
+  echo "fuzz target $fuzzer was not built: install clang and libclang-rt-14-dev (scripts/deps.txt)" > "$log"
+  write_xml 0 "fuzz target not built (clang missing)"
+  exit 1
+fi
+corpus="$work/corpus"
+rm -rf "$corpus" "$work"/crash-* "$work"/timeout-* "$work"/leak-*
+mkdir -p "$corpus"
+cp "$seeds"/* "$corpus"/
+# Fixed seed: the run is reproducible. -timeout: one input taking over 5 s counts as a hang.
+( cd "$work" && timeout $((seconds + 60)) "$fuzzer" -seed=20261129 -max_total_time="$seconds" -timeout=5 \
+    -rss_limit_mb=1024 -max_len=4096 -print_final_stats=1 "$corpus" ) > "$log" 2>&1
+rc=$?
+runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+echo "fuzz: exit $rc, $runs inputs in ${seconds} s"
+if [[ $rc -ne 0 ]]; then
+  write_xml 0 "the fuzzer found a problem (exit $rc); see the log and $work for the input"
+  exit 1
+fi
+if [[ "${runs:-0}" -lt 1000 ]]; then
+  write_xml 0 "the fuzzer ran only ${runs:-0} inputs"
+  exit 1
+fi
+write_xml 1 ""
