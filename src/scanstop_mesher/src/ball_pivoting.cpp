@@ -61,7 +61,12 @@ BallPivoting::BallPivoting(const std::vector<Eigen::Vector3f>& points, const std
   used_.assign(n, 0);
   out_head_.assign(n, -1);
   front_deg_.assign(n, 0);
-  dir_edges_.assign(1024, kEmptyKey);
+  // About 2 triangles, 6 directed edges and 4 front edges per point on a closed surface.
+  size_t cap = 1024;
+  while (cap < 16 * n) cap *= 2;
+  dir_edges_.assign(cap, kEmptyKey);
+  edges_.reserve(4 * n);
+  faces_.reserve(2 * n);
 }
 
 BallPivoting::~BallPivoting() = default;
@@ -302,18 +307,15 @@ void BallPivoting::pivotEdge(int e) {
   u -= axis * axis.dot(u);
   grid_->within(m, radius_ + rho, scratch_);
 
-  struct Candidate {
-    double angle;
-    int q;
-    Eigen::Vector3d center;
-  };
-  std::vector<Candidate> candidates;
-  candidates.reserve(scratch_.size());
+  std::vector<Candidate>& candidates = candidates_;
+  candidates.clear();
+  const double reach2 = 4.0 * r2;  // a ball through i, j and q: q within 2r of both
   for (uint32_t uq : scratch_) {
     const int q = static_cast<int>(uq);
     if (q == i || q == j || q == k) continue;
+    if ((p_[q] - p_[i]).squaredNorm() > reach2 || (p_[q] - p_[j]).squaredNorm() > reach2) continue;
     Eigen::Vector3d c;
-    if (!ballCenter(i, q, j, c) || !normalsAgree(i, q, j)) continue;
+    if (!normalsAgree(i, q, j) || !ballCenter(i, q, j, c)) continue;
     const Eigen::Vector3d v = c - m;
     double angle = std::atan2(axis.dot(u.cross(v)), u.dot(v));  // rotation about i->j, away from k
     if (angle < 0.0) angle = angle > -1e-9 ? 0.0 : angle + kTwoPi;

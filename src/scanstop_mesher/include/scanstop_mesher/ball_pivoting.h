@@ -121,6 +121,12 @@ class BallPivoting {
   std::unique_ptr<SpatialGrid> grid_;
   size_t seed_cursor_ = 0;
   std::vector<uint32_t> scratch_;
+  struct Candidate {
+    double angle;
+    int q;
+    Eigen::Vector3d center;
+  };
+  std::vector<Candidate> candidates_;
   bool insertDirEdge(uint64_t key);
   bool hasDirEdge(uint64_t key) const;
 };
