@@ -1,6 +1,7 @@
 #include "scanstop_pioneer/p2os_client.h"
 
 #include <chrono>
+#include <cstdio>
 #include <thread>
 
 namespace scanstop {
@@ -64,8 +65,10 @@ SyncInfo P2osClient::connect() {
         last_problem = "SYNC" + std::to_string(step) + " answered by a SIP: a session was still open";
         note_ = "closed a session still open from an earlier connection";
       } else {
-        last_problem = "no reply to SYNC" + std::to_string(step) + " within " +
-                       std::to_string(config_.reply_timeout_s) + " s" + (seen.empty() ? "" : " (" + seen + ")");
+        char limit[32];
+        std::snprintf(limit, sizeof(limit), "%.3g s", config_.reply_timeout_s);
+        last_problem = "no reply to SYNC" + std::to_string(step) + " within " + limit +
+                       (seen.empty() ? "" : " (" + seen + ")");
       }
       // Either an earlier session is open or the robot is in an unknown state: close and restart.
       closeStaleSession();

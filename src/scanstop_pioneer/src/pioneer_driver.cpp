@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
@@ -12,6 +13,12 @@ namespace pioneer {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.3g s", s);
+  return buf;
+}
 
 }  // namespace
 
@@ -139,7 +146,7 @@ MotionResult PioneerDriver::runMotion(MotionKind kind, double target) {
     return r;
   }
   request_.reset();
-  failed.message = "the driver did not finish the motion within " + std::to_string(limit_s) + " s";
+  failed.message = "the driver did not finish the motion within " + seconds(limit_s);
   return failed;
 }
 
@@ -207,7 +214,7 @@ bool PioneerDriver::connectOnce() {
     status_.link = LinkState::kDisconnected;
   }
   if (changed) log(2, "cannot connect to the robot: " + error + " (retrying every " +
-                          std::to_string(config_.reconnect_period_s) + " s)");
+                          seconds(config_.reconnect_period_s) + ")");
   return false;
 }
 
@@ -241,8 +248,8 @@ void PioneerDriver::serve() {
         if (status_.teleop_active && now - teleop_t_ > config_.cmd_vel_timeout_s) {
           status_.teleop_active = false;
           status_.cmd_vel_timeouts++;
-          log(1, "cmd_vel timeout: no velocity command for " + std::to_string(config_.cmd_vel_timeout_s) +
-                     " s, stopping the robot");
+          log(1, "cmd_vel timeout: no velocity command for " + seconds(config_.cmd_vel_timeout_s) +
+                     ", stopping the robot");
         }
         teleop = status_.teleop_active;
         tv = teleop_v_;

@@ -135,6 +135,7 @@ TEST(Client, HandshakeAndRecoveryOverAPty) {
   port2.open(emu.devicePath(), 9600);
   P2osClient client2(port2, cc);
   client2.connect();
+  ASSERT_TRUE(client2.receive(payload, 1.0));  // the new session's first SIP
   EXPECT_EQ(client2.recoveries(), 1u);
   EXPECT_NE(client2.lastConnectNote().find("still open"), std::string::npos);
   EXPECT_EQ(emu.with([](RobotEmulator& e) { return e.sessionsOpened(); }), 2u);
@@ -148,6 +149,8 @@ TEST(Client, HandshakeAndRecoveryOverAPty) {
   EXPECT_EQ(emu.with([](RobotEmulator& e) { return e.state(); }), EmulatorState::kConnected);
   P2osClient client3(port2, cc);
   client3.connect();
+  ASSERT_TRUE(client3.receive(payload, 1.0));  // SIPs flow: the session is open
+  EXPECT_TRUE(isStandardSipType(payload[0]));
   EXPECT_EQ(emu.with([](RobotEmulator& e) { return e.state(); }), EmulatorState::kOpen);
   emu.stop();
 }
