@@ -1,5 +1,7 @@
 #include "scanstop_mesher/bpa_mesher_node.h"
 
+#include <sys/stat.h>
+
 #include <chrono>
 #include <sstream>
 
@@ -52,17 +54,28 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("mesher/mesh_markers", 1, true);
   build_srv_ = nh.advertiseService("mesher/build_mesh", &BpaMesherNode::onBuildMesh, this);
   if (!c.load_mesh.empty()) {
-    const TriangleMesh mesh = readMesh(c.load_mesh);
-    ROS_INFO("bpa_mesher_node: loaded %zu triangles from %s", mesh.faces.size(), c.load_mesh.c_str());
-    publishMesh(mesh);
+    reloadMesh();  // a file that exists but cannot be read stops the node
+    if (mesh_mtime_ns_ < 0) ROS_WARN("bpa_mesher_node: %s does not exist (yet); showing it once it does", c.load_mesh.c_str());
   }
   if (c.publish_map) {
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("slam/map_cloud", 1, true);
     path_pub_ = nh.advertise<nav_msgs::Path>("slam/path", 1, true);
     poses_pub_ = nh.advertise<geometry_msgs::PoseArray>("mesher/scan_poses", 1, true);
     publishMapView();
-    map_timer_ = nh.createWallTimer(ros::WallDuration(c.map_poll_s), &BpaMesherNode::onMapTimer, this);
   }
+  if (c.publish_map || !c.load_mesh.empty())
+    map_timer_ = nh.createWallTimer(ros::WallDuration(c.map_poll_s), &BpaMesherNode::onMapTimer, this);
+}
+
+void BpaMesherNode::reloadMesh() {
+  struct stat st;
+  if (::stat(config_.load_mesh.c_str(), &st) != 0) return;
+  const long long mtime = static_cast<long long>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
+  if (mtime == mesh_mtime_ns_) return;
+  const TriangleMesh mesh = readMesh(config_.load_mesh);
+  mesh_mtime_ns_ = mtime;
+  ROS_INFO("bpa_mesher_node: showing %zu triangles from %s", mesh.faces.size(), config_.load_mesh.c_str());
+  publishMesh(mesh);
 }
 
 bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop_msgs::BuildMesh::Response& res) {
@@ -118,11 +131,16 @@ void BpaMesherNode::publishMesh(const TriangleMesh& mesh) {
 }
 
 void BpaMesherNode::onMapTimer(const ros::WallTimerEvent&) {
-  try {
-    publishMapView();
-  } catch (const std::exception& e) {
-    ROS_WARN_THROTTLE(30.0, "bpa_mesher_node: cannot show the map: %s", e.what());
-  }
+  if (config_.publish_map) try {
+      publishMapView();
+    } catch (const std::exception& e) {
+      ROS_WARN_THROTTLE(30.0, "bpa_mesher_node: cannot show the map: %s", e.what());
+    }
+  if (!config_.load_mesh.empty()) try {
+      reloadMesh();
+    } catch (const std::exception& e) {
+      ROS_WARN_THROTTLE(30.0, "bpa_mesher_node: cannot show the mesh: %s", e.what());
+    }
 }
 
 void BpaMesherNode::publishMapView() {

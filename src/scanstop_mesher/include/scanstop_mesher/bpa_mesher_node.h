@@ -28,10 +28,10 @@ struct MesherNodeConfig {
   int normal_min_neighbors = 5;
   std::string color_mode = "height";   ///< "height" or "normal"
   int max_triangles_per_marker = 100000;
-  std::string load_mesh;               ///< mesh (.stl/.ply) published at start ("" = none)
+  std::string load_mesh;               ///< mesh (.stl/.ply) to show ("" = none); reloaded when it changes
   bool publish_map = false;            ///< publish map_dir's points, path, scan poses and base_link (viewing)
   double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)
-  double map_poll_s = 2.0;             ///< period [s] of checking map_dir for new scans when publish_map
+  double map_poll_s = 2.0;             ///< period [s] of checking map_dir and load_mesh for changes
   void validate() const;
 };
 
@@ -46,6 +46,9 @@ class BpaMesherNode {
   void publishMesh(const TriangleMesh& mesh);
   void onMapTimer(const ros::WallTimerEvent&);
   void publishMapView();
+  /// Publishes load_mesh when it exists and changed since the last call; throws IoError when it
+  /// cannot be read.
+  void reloadMesh();
 
   MesherNodeConfig config_;
   MeshColoring coloring_ = MeshColoring::kHeight;
@@ -54,6 +57,7 @@ class BpaMesherNode {
   tf2_ros::StaticTransformBroadcaster static_tf_;
   ros::WallTimer map_timer_;
   std::string published_poses_;
+  long long mesh_mtime_ns_ = -1;
 };
 
 }  // namespace mesher
