@@ -31,6 +31,15 @@ UrgDriver::UrgDriver(const DriverConfig& config, StreamFactory factory) : config
   stats_.state = "not connected yet";
 }
 
+UrgDriver::~UrgDriver() {
+  if (!connected()) return;
+  try {
+    urg_->laserOff();
+  } catch (const std::exception&) {
+    // the device is gone or confused: nothing more to do on shutdown
+  }
+}
+
 bool UrgDriver::connected() const { return scanner_ != nullptr; }
 
 bool UrgDriver::checkLink() {

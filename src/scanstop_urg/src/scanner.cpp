@@ -68,13 +68,19 @@ size_t assemblePlane(PointCloud& cloud, const ScanGeometry& geometry, int plane,
   if (plane < 0 || plane >= planes || static_cast<int>(cloud.height) != planes || static_cast<int>(cloud.width) != beams)
     throw std::invalid_argument("plane " + std::to_string(plane) + " does not fit the cloud layout");
   const Eigen::Vector3f o = geometry.origin(plane, planes);
+  // The same expressions as direction(), with the plane's trigonometry hoisted out of the loop.
+  const double phi = M_PI * plane / planes, cos_phi = std::cos(phi), sin_phi = std::sin(phi);
   size_t valid = 0;
   for (int b = 0; b < beams; ++b) {
     const float r = rangeFromValue(values[static_cast<size_t>(b)], geometry);
     const size_t i = static_cast<size_t>(plane) * beams + b;
     if (!std::isfinite(r)) continue;
+    const double theta = (geometry.first_step + b - geometry.front_step) * 2.0 * M_PI / geometry.steps_per_turn;
+    const double h = std::sin(theta);
+    const Eigen::Vector3f d(static_cast<float>(h * cos_phi), static_cast<float>(h * sin_phi),
+                            static_cast<float>(std::cos(theta)));
     cloud.ranges[i] = r;
-    cloud.points[i] = o + r * geometry.direction(plane, planes, b);
+    cloud.points[i] = o + r * d;
     ++valid;
   }
   return valid;

@@ -79,6 +79,12 @@ TEST(Geometry, RangesFromValues) {
   EXPECT_TRUE(std::isnan(c.ranges[682]));
   EXPECT_FLOAT_EQ(c.ranges[683], 1.0f);
   EXPECT_TRUE(c.points[683].isApprox(g.origin(1, 2) + g.direction(1, 2, 1), 1e-6f));
+  // Every beam of a plane goes along direction() exactly.
+  std::vector<uint32_t> all(682, 2345);
+  PointCloud c2 = emptyScan(g, 3);
+  assemblePlane(c2, g, 2, 3, all);
+  for (int b = 0; b < 682; ++b)
+    ASSERT_EQ(c2.points[2 * 682 + b], g.origin(2, 3) + 2.345f * g.direction(2, 3, b)) << b;
   v.pop_back();
   EXPECT_THROW(assemblePlane(c, g, 1, 2, v), std::invalid_argument);
 }
@@ -122,6 +128,21 @@ TEST(Driver, CleanScanLiesOnTheRoomSurfaces) {
   EXPECT_EQ(st.scans_ok, 1u);
   EXPECT_EQ(st.scip11_switches, 1u);  // the emulated URG boots in SCIP 1.1
   EXPECT_NE(st.state.find("URG-04LX"), std::string::npos) << st.state;
+}
+
+TEST(Driver, FourHundredPlanesAndLaserOffAtTheEnd) {
+  Rig rig;
+  {
+    UrgDriver driver(fastConfig(), rigFactory(rig));
+    const ScanResult r = driver.takeScan(400);
+    ASSERT_TRUE(r.success) << r.message;
+    EXPECT_EQ(r.raw_points, 272800u);
+    EXPECT_EQ(r.cloud.size(), 272800u);
+    EXPECT_EQ(r.valid_points + r.error_codes + r.outliers_removed, 272800u);  // nothing out of range here
+    EXPECT_EQ(rig.urg.scans(), 400u);
+    EXPECT_TRUE(rig.urg.laserOn());
+  }
+  EXPECT_FALSE(rig.urg.laserOn());  // QT when the driver goes away
 }
 
 TEST(Driver, CorruptSumsAndDroppedBytesAreReRead) {

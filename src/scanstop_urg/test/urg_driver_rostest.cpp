@@ -187,7 +187,7 @@ TEST(RotatingUrgDriver, PlatformStallFailsClearlyWithoutPublishing) {
 }
 
 TEST(RotatingUrgDriver, ShortSilenceDropsPlanesLongSilenceReconnects) {
-  inject("silence 1.5");
+  inject("silence 2");
   scanstop_msgs::TakeScan srv = scan(50);
   ASSERT_TRUE(srv.response.success) << srv.response.message;
   EXPECT_GE(srv.response.counts.planes_dropped, 1u);

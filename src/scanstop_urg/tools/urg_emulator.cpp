@@ -206,10 +206,18 @@ int main(int argc, char** argv) {
   std::mt19937 rng(5);
 
   int control = -1;
+  bool made_fifo = false;
   LineSplitter control_splitter(256);
   if (!control_path.empty()) {
     struct stat st {};
-    if (::stat(control_path.c_str(), &st) != 0 && ::mkfifo(control_path.c_str(), 0600) != 0) {
+    if (::stat(control_path.c_str(), &st) == 0) {
+      if (!S_ISFIFO(st.st_mode)) {
+        std::fprintf(stderr, "urg_emulator: --control %s exists and is not a FIFO\n", control_path.c_str());
+        return 2;
+      }
+    } else if (::mkfifo(control_path.c_str(), 0600) == 0) {
+      made_fifo = true;
+    } else {
       std::fprintf(stderr, "urg_emulator: cannot create the control FIFO %s: %s\n", control_path.c_str(),
                    std::strerror(errno));
       return 1;
@@ -326,5 +334,6 @@ int main(int argc, char** argv) {
   urg_pty.close();
   platform_pty.close();
   if (control >= 0) ::close(control);
+  if (made_fifo) ::unlink(control_path.c_str());
   return 0;
 }

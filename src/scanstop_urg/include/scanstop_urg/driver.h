@@ -49,6 +49,10 @@ struct DriverStats {
 class UrgDriver {
  public:
   explicit UrgDriver(const DriverConfig& config, StreamFactory factory = serialStreamFactory());
+  /// Switches the laser off (QT) when still connected.
+  ~UrgDriver();
+  UrgDriver(const UrgDriver&) = delete;
+  UrgDriver& operator=(const UrgDriver&) = delete;
   /// Connects when not connected (open both ports, handshake); returns whether connected now.
   bool connect();
   /// Drops the connection (closing the ports), recording `reason`.
