@@ -7,7 +7,13 @@
 #include <cstdio>
 #include <string>
 
+#include <Eigen/Geometry>
+#include <fstream>
+#include <sstream>
+
+#include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/shared_data.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_mesher/mesher.h"
 #include "synthetic_room.h"
@@ -161,4 +167,41 @@ TEST(Mesher, BadSettingsAreNamed) {
   EXPECT_THROW(c.validate(), ConfigError);
   ScanPoints none;
   EXPECT_THROW(buildMesh(none, MesherConfig()), std::runtime_error);
+}
+
+// The ten real range scans of the Stanford bunny, registered with bun.conf (p_common =
+// R(q)^T p + t), normals estimated and turned towards each scan's camera (on the scan's +z axis):
+// noisy, overlapping input; the mesh stays manifold and on the reference surface.
+TEST(Mesher, TenRegisteredBunnyScansStayManifold) {
+  const std::string dir = sharedDataPath("bunny/scans/");
+  std::ifstream conf(dir + "bun.conf");
+  ASSERT_TRUE(conf.good()) << dir << "bun.conf";
+  ScanPoints pts;
+  std::string line;
+  while (std::getline(conf, line)) {
+    std::istringstream in(line);
+    std::string kind, file;
+    float tx, ty, tz, qx, qy, qz, qw;
+    if (!(in >> kind >> file >> tx >> ty >> tz >> qx >> qy >> qz >> qw) || kind != "bmesh") continue;
+    const Eigen::Quaternionf q(qw, qx, qy, qz);
+    const Eigen::Vector3f t(tx, ty, tz);
+    pts.origins.push_back(q.conjugate() * Eigen::Vector3f(0, 0, 1) + t);
+    for (const auto& p : readPlyCloud(dir + file).points) {
+      pts.points.push_back(q.conjugate() * p + t);
+      pts.view.push_back(static_cast<uint32_t>(pts.origins.size() - 1));
+    }
+  }
+  ASSERT_EQ(pts.origins.size(), 10u);
+  MesherConfig config;
+  config.voxel_m = 0.001;
+  const MesherResult r = buildMesh(pts, config);
+  std::cout << "bunny scans: " << r.input_points << " points -> " << r.points << " meshed, " << r.mesh.faces.size()
+            << " triangles in " << r.seconds << " s" << std::endl;
+  EXPECT_GT(r.mesh.faces.size(), 30000u);
+  EXPECT_EQ(r.topology.nonmanifold_edges, 0u);
+  EXPECT_EQ(r.topology.nonmanifold_vertices, 0u);
+  EXPECT_EQ(r.topology.inconsistent_edges, 0u);
+  const SurfaceDistance d = distanceToSurface(sampleFaces(r.mesh), readPly(sharedDataPath("bunny/bun_zipper.ply")));
+  std::cout << "bunny scans: mean distance to the reference " << d.mean_m * 1e3 << " mm" << std::endl;
+  EXPECT_LT(d.mean_m, 0.0005);
 }
