@@ -310,9 +310,18 @@ TEST(Driver, HandshakeFromTimeStampModeAndFailures) {
   Rig rig;
   rig.urg.handleLine("SCIP2.0");
   rig.urg.handleLine("TM0");  // a crashed client left time-stamp mode on
+  rig.noise_before_next_reply = "0?X0CB1DhI\n\nTM1;4\n00P\n" + std::string(200, '~') + "\n";  // stale stream, garbage
   UrgDriver driver(fastConfig(), rigFactory(rig));
   ASSERT_TRUE(driver.connect()) << driver.stats().state;
   EXPECT_EQ(driver.stats().scip11_switches, 0u);
+  EXPECT_GE(driver.stats().skipped_lines, 4u);
+
+  // Garbage without a line end swallows the echo of the first reply: a timeout, then recovery.
+  Rig swallowed;
+  swallowed.noise_before_next_reply = std::string(200, '~');
+  UrgDriver d1(fastConfig(), rigFactory(swallowed));
+  ASSERT_TRUE(d1.connect()) << d1.stats().state;
+  EXPECT_EQ(d1.stats().timeouts, 1u);
 
   Rig faulty;
   faulty.urg.setLaserFault(true);

@@ -228,6 +228,23 @@ TEST(RotatingUrgDriver, DisconnectIsNoticedReportedAndReconnected) {
   EXPECT_EQ(checkAgainstClean(srv), 0u);
 }
 
+TEST(RotatingUrgDriver, LaserFaultIsReportedUntilRepaired) {
+  inject("laser_fault 1");
+  inject("powercycle");  // the sensor restarts in SCIP 1.1 and its laser does not come on
+  scanstop_msgs::TakeScan srv = scan(50);
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("laser fault"), std::string::npos) << srv.response.message;
+  ASSERT_TRUE(waitConnected(false, 5.0));
+  ros::WallDuration(1.0).sleep();  // reconnect attempts keep failing, with the reason
+  EXPECT_NE(diag("message").find("laser fault"), std::string::npos) << diag("message");
+  EXPECT_EQ(diag("connected"), "False");
+  inject("laser_fault 0");
+  ASSERT_TRUE(waitConnected(true, 30.0)) << diag("message");
+  srv = scan(50);
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_EQ(checkAgainstClean(srv), 0u);
+}
+
 TEST(RotatingUrgDriver, ShippedConfigEqualsTheDefaultsAndBadValuesAreNamed) {
   // config/urg.yaml, loaded unmodified into /urg_yaml by the launch file.
   const scanstop::urg::DriverConfig c = scanstop::urg::readDriverConfig(ros::NodeHandle("/urg_yaml"));
