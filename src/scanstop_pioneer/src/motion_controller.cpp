@@ -26,6 +26,8 @@ void MotionConfig::validate(const std::string& p) const {
   requireInRange(p + "min_angular_speed", min_angular_speed_radps, 0.0175, angular_speed_radps, "rad/s");
   requirePositive(p + "linear_decel", linear_decel_mps2, "m/s^2");
   requirePositive(p + "angular_decel", angular_decel_radps2, "rad/s^2");
+  requireInRange(p + "approach_distance", approach_distance_m, 0.0, 1.0, "m");
+  requireInRange(p + "approach_angle", approach_angle_rad, 0.0, 1.0, "rad");
   requireInRange(p + "distance_tolerance", distance_tolerance_m, 0.0, 0.5, "m");
   requireInRange(p + "angle_tolerance", angle_tolerance_rad, 0.0, 0.5, "rad");
   requireInRange(p + "timeout_factor", timeout_factor, 1.0, 100.0);
@@ -60,7 +62,9 @@ MotionController::MotionController(const MotionConfig& config, MotionKind kind, 
                                 ", " + fmt(limit) + "]");
   const double speed = kind == MotionKind::kRotate ? config.angular_speed_radps : config.linear_speed_mps;
   const double decel = kind == MotionKind::kRotate ? config.angular_decel_radps2 : config.linear_decel_mps2;
-  const double nominal = std::abs(target) / speed + speed / decel;
+  const double min_speed = kind == MotionKind::kRotate ? config.min_angular_speed_radps : config.min_linear_speed_mps;
+  const double approach = kind == MotionKind::kRotate ? config.approach_angle_rad : config.approach_distance_m;
+  const double nominal = std::abs(target) / speed + speed / decel + std::min(std::abs(target), approach) / min_speed;
   timeout_s_ = config.timeout_factor * nominal + config.timeout_extra_s;
   const double tol = kind == MotionKind::kRotate ? config.angle_tolerance_rad : config.distance_tolerance_m;
   if (std::abs(target) <= tol) {
@@ -177,11 +181,15 @@ MotionCommand MotionController::update(const MotionSample& s) {
       return command;
     }
     if (kind_ == MotionKind::kRotate) {
-      const double w = std::clamp(std::sqrt(2.0 * config_.angular_decel_radps2 * remaining),
+      // Slow down as sqrt(2 a d) so that the robot arrives at the approach zone at the minimum
+      // speed, then creep: the overshoot after the stop command stays small despite SIP latency.
+      const double d = std::max(0.0, remaining - config_.approach_angle_rad);
+      const double w = std::clamp(std::sqrt(2.0 * config_.angular_decel_radps2 * d),
                                   config_.min_angular_speed_radps, config_.angular_speed_radps);
       command.w_radps = sign * w;
     } else {
-      const double v = std::clamp(std::sqrt(2.0 * config_.linear_decel_mps2 * remaining), config_.min_linear_speed_mps,
+      const double d = std::max(0.0, remaining - config_.approach_distance_m);
+      const double v = std::clamp(std::sqrt(2.0 * config_.linear_decel_mps2 * d), config_.min_linear_speed_mps,
                                   config_.linear_speed_mps);
       command.v_mps = sign * v;
     }

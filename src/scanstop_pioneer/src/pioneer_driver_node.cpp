@@ -50,6 +50,8 @@ DriverConfig PioneerDriverNode::readParameters(const ros::NodeHandle& pnh) {
   opt(pnh, "motion/min_angular_speed", m.min_angular_speed_radps);
   opt(pnh, "motion/linear_decel", m.linear_decel_mps2);
   opt(pnh, "motion/angular_decel", m.angular_decel_radps2);
+  opt(pnh, "motion/approach_distance", m.approach_distance_m);
+  opt(pnh, "motion/approach_angle", m.approach_angle_rad);
   opt(pnh, "motion/distance_tolerance", m.distance_tolerance_m);
   opt(pnh, "motion/angle_tolerance", m.angle_tolerance_rad);
   opt(pnh, "motion/timeout_factor", m.timeout_factor);

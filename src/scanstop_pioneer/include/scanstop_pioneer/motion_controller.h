@@ -19,6 +19,8 @@ struct MotionConfig {
   double min_angular_speed_radps = 0.07; ///< [rad/s] slowest turn rate of the final approach (4 deg/s)
   double linear_decel_mps2 = 0.25;       ///< [m/s^2] slow-down profile near the target: v = sqrt(2 a d)
   double angular_decel_radps2 = 0.6;     ///< [rad/s^2] slow-down profile near the target angle
+  double approach_distance_m = 0.02;     ///< [m] the last stretch is driven at min_linear_speed
+  double approach_angle_rad = 0.035;     ///< [rad] the last part of a turn is at min_angular_speed
   double distance_tolerance_m = 0.005;   ///< [m] stop when this close to the distance
   double angle_tolerance_rad = 0.005;    ///< [rad] stop when this close to the angle
   double timeout_factor = 2.0;           ///< timeout = factor * nominal duration + timeout_extra_s
