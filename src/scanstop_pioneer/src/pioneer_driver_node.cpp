@@ -126,8 +126,13 @@ void PioneerDriverNode::onSip(const DriverStatus& s) {
 }
 
 void PioneerDriverNode::onTimer(const ros::WallTimerEvent&) {
-  updater_.force_update();
   const DriverStatus s = driver_->status();
+  const ros::WallTime now = ros::WallTime::now();
+  if (!rate_time_.isZero() && now > rate_time_)
+    sip_rate_hz_ = static_cast<double>(s.sips - rate_sips_) / (now - rate_time_).toSec();
+  rate_sips_ = s.sips;
+  rate_time_ = now;
+  updater_.force_update();
   if (s.link != LinkState::kConnected || !s.have_sip) return;
   sensor_msgs::BatteryState battery;
   battery.header.stamp = ros::Time::now();
@@ -178,6 +183,8 @@ void PioneerDriverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
     stat.summary(DiagnosticStatus::ERROR, "not connected: " + (s.last_error.empty() ? "connecting" : s.last_error));
   } else if (!s.have_sip) {
     stat.summary(DiagnosticStatus::WARN, "connected, waiting for the first SIP");
+  } else if (sip_rate_hz_ < 5.0) {
+    stat.summary(DiagnosticStatus::WARN, "SIPs arrive slowly (" + std::to_string(sip_rate_hz_) + " Hz, expected 10)");
   } else if (s.sip.stalled() || s.sip.frontBumpers() || s.sip.rearBumpers()) {
     stat.summary(DiagnosticStatus::WARN, s.sip.stalled() ? "wheel stall" : "bumper pressed");
   } else if (!s.sip.motorsEnabled()) {
@@ -194,6 +201,7 @@ void PioneerDriverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   stat.add("recoveries (session still open)", s.recoveries);
   stat.add("link losses", s.link_losses);
   stat.add("SIPs", s.sips);
+  stat.addf("SIP rate [Hz]", "%.1f", sip_rate_hz_);
   stat.add("checksum errors", s.checksum_errors);
   stat.add("bad count bytes", s.bad_counts);
   stat.add("skipped bytes", s.skipped_bytes);

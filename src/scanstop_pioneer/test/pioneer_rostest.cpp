@@ -134,10 +134,11 @@ TEST(PioneerDriver, A_ConnectsClosingTheSessionLeftOpen) {
   ASSERT_TRUE(odomFlows(5, 20.0)) << "no odom from pioneer_driver";
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(5.0);
   while (ros::WallTime::now() < end && !g_diag->have) ros::WallDuration(0.1).sleep();
-  ros::WallDuration(1.2).sleep();
+  ros::WallDuration(2.2).sleep();  // a full diagnostics period after connecting (SIP rate)
   EXPECT_GE(g_diag->number("recoveries (session still open)"), 1.0);
   EXPECT_EQ(g_diag->value("link"), "connected");
   EXPECT_EQ(g_diag->value("robot"), "scanstop-emulator (Pioneer p2dx)");
+  EXPECT_NEAR(g_diag->number("SIP rate [Hz]"), 10.0, 1.5);
   EXPECT_EQ(g_diag->status.level, diagnostic_msgs::DiagnosticStatus::OK) << g_diag->status.message;
 }
 
