@@ -64,7 +64,7 @@ uint32_t BoxRoomScene::value(double phi, int step) const {
 UrgEmulator::UrgEmulator(RangeFunction ranges) : ranges_(std::move(ranges)) {}
 
 void UrgEmulator::powerCycle() {
-  scip2_ = laser_on_ = tm_mode_ = false;
+  scip2_ = laser_on_ = tm_mode_ = stream_.active = false;
   clock_origin_ms_ = time_ms_;
 }
 
@@ -136,9 +136,10 @@ UrgEmulator::Response UrgEmulator::handleLine(const std::string& line) {
     }
   } else if (cmd == "QT" && params.empty()) {
     laser_on_ = false;
+    stream_.active = false;
     r.bytes = reply(line, "00");
   } else if (cmd == "RS" && params.empty()) {
-    laser_on_ = tm_mode_ = false;
+    laser_on_ = tm_mode_ = stream_.active = false;
     clock_origin_ms_ = time_ms_;
     r.bytes = reply(line, "00");
   } else if (cmd == "TM") {
@@ -155,6 +156,8 @@ UrgEmulator::Response UrgEmulator::handleLine(const std::string& line) {
     }
   } else if (cmd == "GD" || cmd == "GS") {
     return handleScan(line, cmd, params);
+  } else if (cmd == "MD" || cmd == "MS") {
+    return handleStream(line, cmd, params, semi == std::string::npos ? "" : line.substr(semi));
   } else if (cmd == "VV" || cmd == "PP" || cmd == "II" || cmd == "BM" || cmd == "QT" || cmd == "RS") {
     r.bytes = reply(line, "0A");  // parameters where none belong
   } else {
@@ -163,43 +166,20 @@ UrgEmulator::Response UrgEmulator::handleLine(const std::string& line) {
   return r;
 }
 
-UrgEmulator::Response UrgEmulator::handleScan(const std::string& echo, const std::string& cmd, const std::string& params) {
-  Response r;
-  if (params.size() < 10) {
-    r.bytes = reply(echo, "0C");
-    return r;
-  }
-  if (params.size() > 10) {
-    r.bytes = reply(echo, "0A");
-    return r;
-  }
+std::string UrgEmulator::parseRange(const std::string& params, int* first, int* last, int* cluster) const {
   const std::string s_first = params.substr(0, 4), s_last = params.substr(4, 4), s_cluster = params.substr(8, 2);
-  if (!allDigits(s_first)) {
-    r.bytes = reply(echo, "01");
-    return r;
-  }
-  if (!allDigits(s_last)) {
-    r.bytes = reply(echo, "02");
-    return r;
-  }
-  if (!allDigits(s_cluster)) {
-    r.bytes = reply(echo, "03");
-    return r;
-  }
-  const int first = std::stoi(s_first), last = std::stoi(s_last), cluster = std::max(1, std::stoi(s_cluster));
-  if (last > kLastStep) {
-    r.bytes = reply(echo, "04");
-    return r;
-  }
-  if (last < first) {
-    r.bytes = reply(echo, "05");
-    return r;
-  }
-  if (!laser_on_) {
-    r.bytes = reply(echo, "10");
-    return r;
-  }
-  const int chars = cmd == "GD" ? 3 : 2;
+  if (!allDigits(s_first)) return "01";
+  if (!allDigits(s_last)) return "02";
+  if (!allDigits(s_cluster)) return "03";
+  *first = std::stoi(s_first);
+  *last = std::stoi(s_last);
+  *cluster = std::max(1, std::stoi(s_cluster));
+  if (*last > kLastStep) return "04";
+  if (*last < *first) return "05";
+  return "";
+}
+
+std::string UrgEmulator::scanBody(int first, int last, int cluster, int chars) {
   const uint32_t limit = chars == 3 ? (1u << 18) - 1 : (1u << 12) - 1;
   std::string encoded;
   encoded.reserve(static_cast<size_t>((last - first + 1) * chars));
@@ -220,10 +200,85 @@ UrgEmulator::Response UrgEmulator::handleScan(const std::string& echo, const std
     }
     encoded += encodeValue(std::min(have_valid ? best : first_code, limit), chars);
   }
-  r.bytes = reply(echo, "00", withSum(encodeValue(timestamp(), 4)) + "\n" + encodeDataBlock(encoded));
+  ++scans_;
+  return withSum(encodeValue(timestamp(), 4)) + "\n" + encodeDataBlock(encoded);
+}
+
+UrgEmulator::Response UrgEmulator::handleScan(const std::string& echo, const std::string& cmd, const std::string& params) {
+  Response r;
+  if (params.size() != 10) {
+    r.bytes = reply(echo, params.size() < 10 ? "0C" : "0A");
+    return r;
+  }
+  int first = 0, last = 0, cluster = 1;
+  const std::string problem = parseRange(params, &first, &last, &cluster);
+  if (!problem.empty()) {
+    r.bytes = reply(echo, problem);
+    return r;
+  }
+  if (!laser_on_) {
+    r.bytes = reply(echo, "10");
+    return r;
+  }
+  r.bytes = reply(echo, "00", scanBody(first, last, cluster, cmd == "GD" ? 3 : 2));
   r.delay_s = scan_period_s_;
   r.scan = true;
-  ++scans_;
+  return r;
+}
+
+UrgEmulator::Response UrgEmulator::handleStream(const std::string& echo, const std::string& cmd,
+                                                const std::string& params, const std::string& tag) {
+  Response r;
+  if (params.size() != 13) {
+    r.bytes = reply(echo, params.size() < 13 ? "0C" : "0A");
+    return r;
+  }
+  int first = 0, last = 0, cluster = 1;
+  const std::string problem = parseRange(params.substr(0, 10), &first, &last, &cluster);
+  if (!problem.empty()) {
+    r.bytes = reply(echo, problem);
+    return r;
+  }
+  if (!allDigits(params.substr(10, 1))) {
+    r.bytes = reply(echo, "06");
+    return r;
+  }
+  if (!allDigits(params.substr(11, 2))) {
+    r.bytes = reply(echo, "07");
+    return r;
+  }
+  laser_on_ = true;  // MD switches the laser on itself
+  stream_.active = true;
+  stream_.cmd = cmd;
+  stream_.range = params.substr(0, 10);
+  stream_.tag = tag;
+  stream_.first = first;
+  stream_.last = last;
+  stream_.cluster = cluster;
+  stream_.chars = cmd == "MD" ? 3 : 2;
+  stream_.skip = params[10] - '0';
+  stream_.remaining = std::stoi(params.substr(11, 2));
+  stream_.endless = stream_.remaining == 0;
+  r.bytes = reply(echo, "00");
+  r.delay_s = scan_period_s_;
+  return r;
+}
+
+UrgEmulator::Response UrgEmulator::nextStreamScan() {
+  Response r;
+  if (!stream_.active) return r;
+  if (!stream_.endless) --stream_.remaining;
+  // skip is one digit, remaining two (both parsed from digits)
+  char count[32];
+  std::snprintf(count, sizeof(count), "%d%02d", stream_.skip % 10, stream_.endless ? 0 : stream_.remaining % 100);
+  const std::string echo = stream_.cmd + stream_.range + count + stream_.tag;
+  r.bytes = reply(echo, "99", scanBody(stream_.first, stream_.last, stream_.cluster, stream_.chars));
+  r.delay_s = scan_period_s_ * (stream_.skip + 1);
+  r.scan = true;
+  if (!stream_.endless && stream_.remaining <= 0) {  // the last scan: the stream ends, the laser goes off
+    stream_.active = false;
+    laser_on_ = false;
+  }
   return r;
 }
 

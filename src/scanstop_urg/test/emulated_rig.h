@@ -34,6 +34,8 @@ class EmulatedStream : public ByteStream {
         out_ += rig_.stepper.handleLine(line);
         return;
       }
+      // A running MD stream (left by a crashed client) sends a scan before each reply.
+      const std::string stream = rig_.urg.streaming() ? rig_.urg.nextStreamScan().bytes : "";
       UrgEmulator::Response r = rig_.urg.handleLine(line);
       rig_.urg.advance(r.delay_s);
       if (rig_.silent_replies > 0) {
@@ -41,7 +43,7 @@ class EmulatedStream : public ByteStream {
         return;
       }
       rig_.faults.apply(r.bytes);
-      out_ += rig_.noise_before_next_reply + r.bytes;
+      out_ += stream + rig_.noise_before_next_reply + r.bytes;
       rig_.noise_before_next_reply.clear();
     });
   }

@@ -316,6 +316,17 @@ TEST(Driver, HandshakeFromTimeStampModeAndFailures) {
   EXPECT_EQ(driver.stats().scip11_switches, 0u);
   EXPECT_GE(driver.stats().skipped_lines, 4u);
 
+  // An endless MD stream left running by a crashed client: skipped on the way to QT's echo, stopped.
+  Rig streaming;
+  streaming.urg.handleLine("SCIP2.0");
+  streaming.urg.handleLine("MD0044072501000");
+  ASSERT_TRUE(streaming.urg.streaming());
+  UrgDriver ds(fastConfig(), rigFactory(streaming));
+  ASSERT_TRUE(ds.connect()) << ds.stats().state;
+  EXPECT_FALSE(streaming.urg.streaming());
+  EXPECT_GE(ds.stats().skipped_lines, 36u);  // echo, 99b, time, 32 data lines, blank
+  EXPECT_TRUE(ds.takeScan(kPlanes).success);
+
   // Garbage without a line end swallows the echo of the first reply: a timeout, then recovery.
   Rig swallowed;
   swallowed.noise_before_next_reply = std::string(200, '~');

@@ -139,6 +139,31 @@ TEST(Scip, FullScanIs31LinesOf64AndOneOf62) {
   EXPECT_EQ(d.values[21], static_cast<uint32_t>(100 + 65 * 7));
 }
 
+TEST(Scip, MdStreamsUntilItsCountOrQt) {
+  UrgEmulator urg([](int step) { return static_cast<uint32_t>(1000 + step); });
+  urg.handleLine("SCIP2.0");
+  EXPECT_EQ(urg.handleLine("MD0044072501002;s").bytes, "MD0044072501002;s\n00P\n\n");  // ack; laser on by itself
+  ASSERT_TRUE(urg.streaming());
+  for (const char* echo : {"MD0044072501001;s", "MD0044072501000;s"}) {
+    const Reply r = readReply(urg.nextStreamScan().bytes, echo);
+    EXPECT_EQ(r.status_line, "99b");
+    ASSERT_EQ(r.data.size(), 33u);
+    Reply as_gd = r;
+    as_gd.status_line = "00P";
+    EXPECT_EQ(decodeScanReply(as_gd, 44, 725, 1).values[0], 1044u);
+  }
+  EXPECT_FALSE(urg.streaming());
+  EXPECT_FALSE(urg.laserOn());  // off after the last scan
+  EXPECT_EQ(urg.handleLine("MD0044072501000").bytes, "MD0044072501000\n00P\n\n");  // endless
+  for (int k = 0; k < 5; ++k) EXPECT_FALSE(urg.nextStreamScan().bytes.empty());
+  EXPECT_EQ(urg.handleLine("QT").bytes, "QT\n00P\n\n");
+  EXPECT_FALSE(urg.streaming());
+  EXPECT_TRUE(urg.nextStreamScan().bytes.empty());
+  EXPECT_EQ(urg.handleLine("MD0044072501x02").bytes, "MD0044072501x02\n06V\n\n");
+  EXPECT_EQ(urg.handleLine("MD00440725010x2").bytes, "MD00440725010x2\n07W\n\n");
+  EXPECT_EQ(urg.handleLine("MD004407250100").bytes, "MD004407250100\n0Cc\n\n");
+}
+
 TEST(Scip, ClusterReportsTheSmallestValidValue) {
   UrgEmulator urg([](int step) { return step == 101 ? 1u : static_cast<uint32_t>(3000 - step); });
   urg.handleLine("SCIP2.0");

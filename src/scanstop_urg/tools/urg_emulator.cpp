@@ -47,6 +47,8 @@ void usage() {
                "  --mount-offset M      optical centre off the axis [m] (default 0)\n"
                "  --no-dark-patch       no low-reflectance patch on the +x wall\n"
                "  --boot-scip2          start in SCIP 2.0 (default: SCIP 1.1 like a powered-up URG-04LX)\n"
+               "  --stale-stream        start in SCIP 2.0 with an endless MD stream running, as a crashed\n"
+               "                        client leaves it\n"
                "control commands (one per line): corrupt N | drop N [BYTES] | truncate N | garbage |\n"
                "  silence SECONDS | disconnect SECONDS | powercycle | stall N | laser_fault 0|1 | quit\n");
 }
@@ -147,7 +149,7 @@ int main(int argc, char** argv) {
   platform_pty.name = "platform";
   std::string control_path;
   double scan_period = 0.1;
-  bool boot_scip2 = false;
+  bool boot_scip2 = false, stale_stream = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -173,6 +175,7 @@ int main(int argc, char** argv) {
     else if (a == "--mount-offset") scene.mount_offset = parseNumber(next(), "--mount-offset");
     else if (a == "--no-dark-patch") scene.dark_patch = false;
     else if (a == "--boot-scip2") boot_scip2 = true;
+    else if (a == "--stale-stream") stale_stream = true;
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;
@@ -201,7 +204,8 @@ int main(int argc, char** argv) {
   StepperEmulator stepper;
   UrgEmulator urg([&](int step) { return scene.value(stepper.angle(), step); });
   urg.setScanPeriod(scan_period);
-  if (boot_scip2) urg.handleLine("SCIP2.0");
+  if (boot_scip2 || stale_stream) urg.handleLine("SCIP2.0");
+  if (stale_stream) urg.handleLine("MD0044072501000;crashed");  // nobody reads the acknowledgement
   FaultInjector faults(20261129);
   std::mt19937 rng(5);
 
@@ -231,7 +235,7 @@ int main(int argc, char** argv) {
   if (!urg_pty.open() || !platform_pty.open()) return 1;
 
   std::deque<Pending> urg_out;
-  double last_due = 0.0, silence_until = 0.0, reconnect_at = 0.0, last_tick = now_s();
+  double last_due = 0.0, silence_until = 0.0, reconnect_at = 0.0, last_tick = now_s(), next_stream = 0.0;
   bool disconnected = false, quit = false;
 
   auto handleControl = [&](const std::string& line) {
@@ -293,6 +297,14 @@ int main(int argc, char** argv) {
       if (!urg_pty.open() || !platform_pty.open()) return 1;
       disconnected = false;
     }
+    // A running MD stream sends a scan every scan period.
+    if (urg.streaming() && !disconnected && t >= next_stream && t >= silence_until) {
+      const UrgEmulator::Response r = urg.nextStreamScan();
+      const double due = std::max(t, last_due);
+      last_due = due;
+      urg_out.push_back({due, r.bytes});
+      next_stream = t + std::max(r.delay_s, 0.001);
+    }
     // Send the replies that are due.
     while (!urg_out.empty() && urg_out.front().due <= t) {
       urg_pty.send(urg_out.front().bytes);
@@ -304,6 +316,7 @@ int main(int argc, char** argv) {
     if (control >= 0) fds.push_back({control, POLLIN, 0});
     double wait = 0.05;
     if (!urg_out.empty()) wait = std::min(wait, std::max(0.0, urg_out.front().due - t));
+    if (urg.streaming()) wait = std::min(wait, std::max(0.0, next_stream - t));
     ::poll(fds.data(), fds.size(), static_cast<int>(wait * 1000.0));
     for (const pollfd& p : fds) {
       if (!(p.revents & POLLIN)) continue;

@@ -32,7 +32,8 @@ struct BoxRoomScene {
 };
 
 /// The URG-04LX's SCIP state machine: SCIP 1.1 after power-up until "SCIP2.0", then VV PP II BM QT
-/// RS TM0/1/2 GD GS with tags, the real status codes and sums. Scan values come from `ranges`.
+/// RS TM0/1/2 GD GS MD MS with tags, the real status codes and sums. Scan values come from `ranges`.
+/// Other commands are answered while an MD stream runs (whole messages, never mixed within one).
 class UrgEmulator {
  public:
   /// Returns the value of `step` for the current scan (mm or an error code).
@@ -56,8 +57,25 @@ class UrgEmulator {
   void setLaserFault(bool fault) { laser_fault_ = fault; }
   void setScanPeriod(double s) { scan_period_s_ = s; }
   uint64_t scans() const { return scans_; }
+  /// An MD/MS stream is running (it ends after its count, or on QT / RS).
+  bool streaming() const { return stream_.active; }
+  /// The next scan message of the running stream: echo with the scans remaining, 99b, time,
+  /// data, blank line; delay_s is the time to the next one. Empty when no stream runs.
+  Response nextStreamScan();
 
  private:
+  struct Stream {
+    bool active = false;
+    std::string cmd, range, tag;  ///< "MD"/"MS", "ssssEEEEcc", ";tag" or ""
+    int first = 0, last = 0, cluster = 1, chars = 3, skip = 0, remaining = 0;
+    bool endless = false;  ///< nn = 00: until QT
+  };
+  /// Parses "ssssEEEEcc"; returns "" or the error status.
+  std::string parseRange(const std::string& params, int* first, int* last, int* cluster) const;
+  /// The time line and data block of one scan.
+  std::string scanBody(int first, int last, int cluster, int chars);
+  Response handleStream(const std::string& echo, const std::string& cmd, const std::string& params,
+                        const std::string& tag);
   std::string reply(const std::string& echo, const std::string& status, const std::string& body = "") const;
   std::string kv(const std::string& key, const std::string& value) const;
   uint32_t timestamp() const;
@@ -68,6 +86,7 @@ class UrgEmulator {
   double time_ms_ = 0.0, clock_origin_ms_ = 0.0;
   double scan_period_s_ = 0.1;
   uint64_t scans_ = 0;
+  Stream stream_;
 };
 
 /// The stepper rotation controller (platform_protocol.h): home, step count, step, status, error.
