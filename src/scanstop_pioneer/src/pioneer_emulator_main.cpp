@@ -23,11 +23,13 @@ void onSignal(int) { g_stop = 1; }
 void usage() {
   std::cerr << "usage: pioneer_emulator [--link PATH] [--control FIFO] [--start-open] [--name NAME]\n"
                "                        [--subclass SUB] [--sip-period S] [--watchdog S] [--seed N]\n"
+               "                        [--start-x MM] [--start-y MM]\n"
                "  --link PATH     keep a symlink PATH -> the pty slave (open PATH as the robot's port)\n"
                "  --control FIFO  create FIFO and read fault commands from it, one per line:\n"
                "                  corrupt N | drop N | garbage N | silence S | disconnect S | stall on|off |\n"
                "                  encoder on|off | bump front|rear|off | still_open | battery V | status\n"
-               "  --start-open    start with a session left open by an earlier client (SIPs streaming)\n";
+               "  --start-open    start with a session left open by an earlier client (SIPs streaming)\n"
+               "  --start-x/-y MM odometry counters at OPEN (e.g. 27400 to cross the 15-bit wrap soon)\n";
 }
 
 double number(const char* text, const char* option) {
@@ -63,6 +65,10 @@ int main(int argc, char** argv) {
       config.sip_period_s = number(argv[++i], "--sip-period");
     } else if (a == "--watchdog" && has_value) {
       config.watchdog_s = number(argv[++i], "--watchdog");
+    } else if (a == "--start-x" && has_value) {
+      config.start_x_mm = number(argv[++i], "--start-x");
+    } else if (a == "--start-y" && has_value) {
+      config.start_y_mm = number(argv[++i], "--start-y");
     } else if (a == "--seed" && has_value) {
       config.seed = static_cast<uint32_t>(number(argv[++i], "--seed"));
     } else if (a == "-h" || a == "--help") {

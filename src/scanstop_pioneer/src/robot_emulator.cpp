@@ -50,7 +50,9 @@ void RobotEmulator::openSession(double t) {
   motors_enabled_ = false;  // motors are always disabled after connecting
   set_v_mps_ = set_w_radps_ = v_mps_ = w_radps_ = 0.0;
   true_pose_ = Pose2D();
-  odo_x_mm_ = odo_y_mm_ = odo_th_rad_ = 0.0;
+  odo_x_mm_ = config_.start_x_mm;
+  odo_y_mm_ = config_.start_y_mm;
+  odo_th_rad_ = 0.0;
   next_sip_ = t;
   last_packet_t_ = t;
   ++sessions_opened_;

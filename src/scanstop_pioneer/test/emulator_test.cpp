@@ -179,7 +179,10 @@ TEST(Client, NoRobotFailsWithAClearMessage) {
 class DriverOnEmulator : public ::testing::Test {
  protected:
   void SetUp() override {
-    emu_ = std::make_unique<PtyEmulator>(EmulatorConfig(), "");
+    EmulatorConfig ec;
+    // The robot's 15-bit x counter starts 0.15 m before its wrap (0x7FFF units * 0.84 mm).
+    ec.start_x_mm = 0x7FFF * 0.84 - 150.0;
+    emu_ = std::make_unique<PtyEmulator>(ec, "");
     emu_->start();
     DriverConfig config;
     config.port = emu_->devicePath();
@@ -197,6 +200,21 @@ class DriverOnEmulator : public ::testing::Test {
   std::unique_ptr<PtyEmulator> emu_;
   std::unique_ptr<PioneerDriver> driver_;
 };
+
+TEST_F(DriverOnEmulator, ForwardAcrossThe15BitWrap) {
+  // Along the robot's own x axis: the counter wraps from 0x7FFF to 0 after 0.15 m.
+  const MotionResult f = driver_->forward(0.4);
+  ASSERT_TRUE(f.success) << f.message;
+  EXPECT_NEAR(f.achieved, 0.4, 0.01);
+  EXPECT_NEAR(f.odom.x, truth().x, 0.003);
+  EXPECT_NEAR(f.odom.y, 0.0, 0.003);
+  const DriverStatus s = driver_->status();
+  EXPECT_LT(s.sip.x, 1000);  // the counter did wrap
+  const MotionResult b = driver_->forward(-0.4);
+  ASSERT_TRUE(b.success) << b.message;
+  EXPECT_NEAR(driver_->status().odom.x, truth().x, 0.003);
+  EXPECT_GT(driver_->status().sip.x, 0x7000);  // and wrapped back
+}
 
 TEST_F(DriverOnEmulator, RotateAndForwardMatchTheRobot) {
   const MotionResult r = driver_->rotate(M_PI / 2);

@@ -26,6 +26,8 @@ struct EmulatorConfig {
   double rot_accel_radps2 = 1.745;                     ///< [rad/s^2] SETRA default (100 deg/s^2)
   double battery_v = 12.5;                             ///< [V]
   uint32_t seed = 1;                                   ///< fault randomness
+  double start_x_mm = 0.0;                             ///< [mm] odometry counters at OPEN (e.g. near the
+  double start_y_mm = 0.0;                             ///<      15-bit wrap, 0x7FFF units = 27.5 m)
 };
 
 enum class EmulatorState { kWait, kGot0, kGot1, kConnected, kOpen };
