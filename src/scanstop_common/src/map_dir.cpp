@@ -22,7 +22,13 @@ const char* const kHeader =
     "converged,iterations,correspondences,rms_m,overlap";
 constexpr size_t kColumns = 17;
 
+/// Creates the directory and any missing parents (like mkdir -p).
 void makeDirectory(const std::string& path) {
+  for (size_t pos = path.find('/', 1); pos != std::string::npos; pos = path.find('/', pos + 1)) {
+    const std::string parent = path.substr(0, pos);
+    if (::mkdir(parent.c_str(), 0755) != 0 && errno != EEXIST)
+      throw IoError(parent, std::string("cannot create directory: ") + std::strerror(errno));
+  }
   if (::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST)
     throw IoError(path, std::string("cannot create directory: ") + std::strerror(errno));
   struct stat st;

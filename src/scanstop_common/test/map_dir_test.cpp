@@ -57,6 +57,19 @@ TEST(MapDirectory, AppendAndReopenKeepsEveryScan) {
   EXPECT_THROW(map.append(info(5, Pose2D()), cloud), IoError);
 }
 
+TEST(MapDirectory, CreatesMissingParentDirectories) {
+  TempDir tmp;
+  const std::string dir = tmp.file("run/not/there/map");
+  MapDirectory map(dir);
+  PointCloud cloud;
+  cloud.push_back({1, 0, 0});
+  map.append(info(0, Pose2D()), cloud);
+  EXPECT_EQ(MapDirectory(dir).size(), 1u);
+  // A parent that is a file is reported by name.
+  writeFileAtomic(tmp.file("file"), "x");
+  expectIoError([&] { MapDirectory bad(tmp.file("file") + "/map"); }, tmp.file("file"), "directory");
+}
+
 TEST(MapDirectory, UpdateInfoRewritesPoses) {
   TempDir tmp;
   PointCloud cloud;

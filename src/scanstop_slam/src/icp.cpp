@@ -1,5 +1,6 @@
 #include "scanstop_slam/icp.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <cmath>
 #include <limits>
@@ -11,8 +12,12 @@
 namespace scanstop {
 namespace slam {
 
-VoxelMap::VoxelMap(double voxel_m, int max_points_per_voxel) : voxel_(voxel_m), max_per_voxel_(max_points_per_voxel) {
+VoxelMap::VoxelMap(double voxel_m, int max_points_per_voxel, double min_spacing_m)
+    : voxel_(voxel_m),
+      max_per_voxel_(max_points_per_voxel),
+      min_spacing2_(static_cast<float>(min_spacing_m * min_spacing_m)) {
   requirePositive("voxel", voxel_m, "m");
+  requireInRange("map_spacing", min_spacing_m, 0.0, voxel_m, "m");
   if (max_points_per_voxel < 1) throw ConfigError("max_points_per_voxel must be >= 1");
 }
 
@@ -22,39 +27,87 @@ VoxelMap::Key VoxelMap::key(int x, int y, int z) const {
   return (enc(x) << 42) | (enc(y) << 21) | enc(z);
 }
 
+void VoxelMap::classify(Cell& cell) {
+  cell.horizontal = false;
+  if (cell.points.size() < 5) return;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : cell.points) mean += p.cast<double>();
+  mean /= static_cast<double>(cell.points.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : cell.points) {
+    const Eigen::Vector3d d = p.cast<double>() - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  // Planar (smallest spread well below the others) with a normal near z.
+  const bool planar = eig.eigenvalues()(0) < 0.05 * eig.eigenvalues()(1);
+  cell.horizontal = planar && std::abs(eig.eigenvectors().col(0).z()) > std::cos(20.0 * M_PI / 180.0);
+}
+
 void VoxelMap::add(const std::vector<Eigen::Vector3f>& points) {
+  std::unordered_set<Key> touched;
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
     const int x = static_cast<int>(std::floor(p.x() / voxel_));
     const int y = static_cast<int>(std::floor(p.y() / voxel_));
     const int z = static_cast<int>(std::floor(p.z() / voxel_));
-    auto& cell = cells_[key(x, y, z)];
+    const Key k = key(x, y, z);
+    auto& cell = cells_[k].points;
     if (static_cast<int>(cell.size()) >= max_per_voxel_) continue;
+    if (min_spacing2_ > 0.0f) {
+      bool crowded = false;
+      for (const auto& q : cell)
+        if ((q - p).squaredNorm() < min_spacing2_) {
+          crowded = true;
+          break;
+        }
+      if (crowded) continue;
+    }
     cell.push_back(p);
+    touched.insert(k);
     ++size_;
   }
+  for (const Key k : touched) classify(cells_[k]);
 }
 
-bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2) const {
-  const int x = static_cast<int>(std::floor(q.x() / voxel_));
-  const int y = static_cast<int>(std::floor(q.y() / voxel_));
-  const int z = static_cast<int>(std::floor(q.z() / voxel_));
+bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,
+                       bool* horizontal) const {
+  const float inv = static_cast<float>(1.0 / voxel_);
+  const float vs = static_cast<float>(voxel_);
+  const int x = static_cast<int>(std::floor(q.x() * inv));
+  const int y = static_cast<int>(std::floor(q.y() * inv));
+  const int z = static_cast<int>(std::floor(q.z() * inv));
+  // Offsets of q inside its voxel: a neighbour voxel is searched only when its box is closer to q
+  // than the best point so far (the own voxel first, so on surfaces most neighbours are skipped).
+  const float lo[3] = {q.x() - x * vs, q.y() - y * vs, q.z() - z * vs};
+  const float hi[3] = {vs - lo[0], vs - lo[1], vs - lo[2]};
   float best = static_cast<float>(radius_m * radius_m);
   bool found = false;
+  const auto scan = [&](int dx, int dy, int dz) {
+    const int d[3] = {dx, dy, dz};
+    float box2 = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+      const float g = d[a] < 0 ? lo[a] : (d[a] > 0 ? hi[a] : 0.0f);
+      box2 += g * g;
+    }
+    if (box2 >= best) return;
+    const auto it = cells_.find(key(x + dx, y + dy, z + dz));
+    if (it == cells_.end()) return;
+    for (const auto& p : it->second.points) {
+      const float d2 = (p - q).squaredNorm();
+      if (d2 < best) {
+        best = d2;
+        out = p;
+        found = true;
+        if (horizontal) *horizontal = it->second.horizontal;
+      }
+    }
+  };
+  scan(0, 0, 0);
   for (int dx = -1; dx <= 1; ++dx)
     for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz) {
-        const auto it = cells_.find(key(x + dx, y + dy, z + dz));
-        if (it == cells_.end()) continue;
-        for (const auto& p : it->second) {
-          const float d2 = (p - q).squaredNorm();
-          if (d2 < best) {
-            best = d2;
-            out = p;
-            found = true;
-          }
-        }
-      }
+      for (int dz = -1; dz <= 1; ++dz)
+        if (dx != 0 || dy != 0 || dz != 0) scan(dx, dy, dz);
   dist2 = best;
   return found;
 }
@@ -62,7 +115,7 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
 std::vector<Eigen::Vector3f> VoxelMap::points() const {
   std::vector<Eigen::Vector3f> out;
   out.reserve(size_);
-  for (const auto& [k, cell] : cells_) out.insert(out.end(), cell.begin(), cell.end());
+  for (const auto& [k, cell] : cells_) out.insert(out.end(), cell.points.begin(), cell.points.end());
   return out;
 }
 
@@ -98,6 +151,27 @@ std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>&
   return out;
 }
 
+namespace {
+
+/// Pose parameters: translation and rotation vector (rotation scaled by 1 m, so that both parts
+/// weigh alike for a scene of metres).
+Eigen::Matrix<double, 6, 1> params(const Eigen::Isometry3d& T) {
+  Eigen::Matrix<double, 6, 1> p;
+  const Eigen::AngleAxisd aa(T.linear());
+  p << T.translation(), aa.axis() * aa.angle();
+  return p;
+}
+
+Eigen::Isometry3d fromParams(const Eigen::Matrix<double, 6, 1>& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const double angle = p.tail<3>().norm();
+  if (angle > 0.0) T.linear() = Eigen::AngleAxisd(angle, p.tail<3>() / angle).toRotationMatrix();
+  T.translation() = p.head<3>();
+  return T;
+}
+
+}  // namespace
+
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
               const IcpConfig& config) {
   IcpResult result;
@@ -106,6 +180,9 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   std::vector<Eigen::Vector3f> matched(source.size());
   std::vector<uint8_t> has(source.size(), 0);
   const double c_max = std::min(config.c_max_m, target.voxelSize());
+  Eigen::Matrix<double, 6, 1> last_step = Eigen::Matrix<double, 6, 1>::Zero();
+  const bool skip_horizontal = !config.six_dof && config.ignore_horizontal;
+  Eigen::Matrix<double, 6, 1> last_params = params(T);
   for (int it = 1; it <= config.max_iterations; ++it) {
     result.iterations = it;
     const Eigen::Isometry3f Tf = T.cast<float>();
@@ -113,7 +190,9 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
 #pragma omp parallel for schedule(dynamic, 2048)
     for (long i = 0; i < n; ++i) {
       float d2;
-      has[i] = target.nearest(Tf * source[i], c_max, matched[i], d2) ? 1 : 0;
+      bool horizontal = false;
+      has[i] = target.nearest(Tf * source[i], c_max, matched[i], d2, &horizontal) && !(skip_horizontal && horizontal)
+                   ? 1 : 0;
     }
     // Centroids and correlation (in double, relative to the current pose).
     // (The transformed source points are recomputed in double: float rounding would keep the
@@ -163,6 +242,32 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
     T = delta * T;
     const double dt = t.norm();
     const double dr = Eigen::AngleAxisd(R).angle();
+    // Besl and McKay's accelerated ICP (1992, section IV.C), linear form: point-to-point ICP
+    // creeps towards the optimum in ever smaller steps along a nearly constant direction, so a
+    // small step alone does not mean it has arrived (the thesis' criterion stops tenths of a
+    // degree short). When two successive steps point the same way (within 10 deg) and shrink by
+    // the ratio rho, the rest of the geometric series, step * rho / (1 - rho) (at most 25 steps),
+    // is taken at once, and convergence is declared only when that rest is below t_c and r_c too.
+    const Eigen::Matrix<double, 6, 1> p = params(T);
+    const Eigen::Matrix<double, 6, 1> step = p - last_params;
+    last_params = p;
+    if (config.accelerate && last_step.norm() > 0.0 && step.norm() > 0.0 && p.tail<3>().norm() < 3.0) {
+      const double cos_angle = step.dot(last_step) / (step.norm() * last_step.norm());
+      const double rho = step.norm() / last_step.norm();
+      if (cos_angle > std::cos(10.0 * M_PI / 180.0) && rho < 0.97) {
+        const Eigen::Matrix<double, 6, 1> rest = std::min(rho / (1.0 - rho), 25.0) * step;
+        if (dt < config.t_c_m && dr < config.r_c_rad && rest.head<3>().norm() < config.t_c_m &&
+            rest.tail<3>().norm() < config.r_c_rad) {
+          result.converged = true;
+          break;
+        }
+        T = fromParams(p + rest);
+        last_params = params(T);
+        last_step.setZero();  // two regular steps before the next extrapolation
+        continue;
+      }
+    }
+    last_step = step;
     if (dt < config.t_c_m && dr < config.r_c_rad) {
       result.converged = true;
       break;

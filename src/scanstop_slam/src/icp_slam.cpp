@@ -11,10 +11,11 @@ void SlamConfig::validate() const {
   icp.validate();
   requireInRange("source_voxel", source_voxel_m, 0.0, 1.0, "m");
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
+  requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
 }
 
 IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
-    : config_(config), map_((config.validate(), config.icp.c_max_m), config.max_points_per_voxel) {
+    : config_(config), map_((config.validate(), config.icp.c_max_m), config.max_points_per_voxel, config.map_spacing_m) {
   if (map_dir.empty()) return;
   dir_ = std::make_unique<MapDirectory>(map_dir);
   for (size_t i = 0; i < dir_->size(); ++i) {

@@ -21,12 +21,16 @@ class VoxelMap {
  public:
   /// voxel_m >= the query radius (one ring of neighbour voxels is searched);
   /// max_points_per_voxel bounds memory and query time on dense surfaces.
-  explicit VoxelMap(double voxel_m = 0.1, int max_points_per_voxel = 30);
+  /// min_spacing_m > 0: a point joins only when no stored point of its voxel is closer than this,
+  /// so the map samples surfaces evenly however the scans' line patterns fall (0 = first come).
+  explicit VoxelMap(double voxel_m = 0.1, int max_points_per_voxel = 30, double min_spacing_m = 0.0);
 
   /// Adds points (map frame); non-finite points are ignored.
   void add(const std::vector<Eigen::Vector3f>& points);
-  /// Nearest stored point within radius_m (<= voxel size) of q; false if none.
-  bool nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2) const;
+  /// Nearest stored point within radius_m (<= voxel size) of q; false if none. horizontal (when
+  /// given) tells whether that point's voxel holds a horizontal surface (floor, ceiling, table top).
+  bool nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,
+               bool* horizontal = nullptr) const;
 
   size_t size() const { return size_; }
   double voxelSize() const { return voxel_; }
@@ -38,8 +42,14 @@ class VoxelMap {
   Key key(int x, int y, int z) const;
   double voxel_;
   int max_per_voxel_;
+  float min_spacing2_;
   size_t size_ = 0;
-  std::unordered_map<Key, std::vector<Eigen::Vector3f>> cells_;
+  struct Cell {
+    std::vector<Eigen::Vector3f> points;
+    bool horizontal = false;  ///< the points lie on a horizontal plane (PCA normal within 20 deg of z)
+  };
+  static void classify(Cell& cell);
+  std::unordered_map<Key, Cell> cells_;
 };
 
 /// ICP parameters (thesis optimum as defaults).
@@ -49,6 +59,10 @@ struct IcpConfig {
   double r_c_rad = 0.02 * M_PI / 180; ///< convergence: rotation change per iteration [rad]
   int max_iterations = 100;
   bool six_dof = false;               ///< false: 3dof (rotation about z, translation in x, y)
+  bool accelerate = true;             ///< Besl-McKay extrapolation of consistent steps (fewer iterations)
+  /// 3dof: leave out correspondences on horizontal surfaces (floor, ceiling). They cannot fix x, y or
+  /// yaw, but their near-identity pairs outnumber the walls' and hold every step back.
+  bool ignore_horizontal = true;
   // Failure detection.
   int min_correspondences = 200;
   double min_overlap = 0.05;          ///< correspondences / source points

@@ -19,6 +19,7 @@ struct SlamConfig {
   IcpConfig icp;
   double source_voxel_m = 0.02;   ///< scan points used for matching: one per voxel of this size (0 = all) [m]
   int max_points_per_voxel = 30;  ///< map points kept per c_max voxel (bounds memory and query time)
+  double map_spacing_m = 0.0;     ///< a map point joins only if none of its voxel is closer [m] (0 = first come)
   void validate() const;
 };
 

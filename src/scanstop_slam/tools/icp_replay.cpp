@@ -1,0 +1,120 @@
+/// icp_replay: the thesis' offline IcpFileSlam on a saved map directory. Re-registers every scan of
+/// MAP_DIR (its base_link cloud and the odometry pose stored with it) in order, as icp_slam_node
+/// would have, with the parameters given here, and prints the corrected poses. With --truth (a
+/// mission_state.yaml holding true_pose per scan, written by mission_node in simulation) it prints
+/// the error of the replayed, the stored and the odometry-only pose against ground truth.
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "scanstop_common/error.h"
+#include "scanstop_slam/icp_slam.h"
+
+using namespace scanstop;
+
+namespace {
+
+void usage() {
+  std::cerr << "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof]\n"
+               "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
+               "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n";
+}
+
+std::vector<Pose2D> readTruth(const std::string& path) {
+  std::vector<Pose2D> out;
+  const YAML::Node root = YAML::LoadFile(path);
+  for (const auto& s : root["scans"]) {
+    const auto p = s["true_pose"];
+    if (!p || p.size() != 3) throw IoError(path, "a scan without true_pose [x, y, yaw]");
+    out.emplace_back(p[0].as<double>(), p[1].as<double>(), p[2].as<double>());
+  }
+  return out;
+}
+
+double posErr(const Pose2D& a, const Pose2D& b) { return std::hypot(a.x - b.x, a.y - b.y); }
+double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAngle(a.yaw - b.yaw)) * 180.0 / M_PI; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    usage();
+    return 2;
+  }
+  std::string map_dir = argv[1], out_dir, truth_path;
+  bool quiet = false;
+  size_t max_scans = 0;
+  slam::SlamConfig config;
+  try {
+    for (int i = 2; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto next = [&]() -> std::string {
+        if (i + 1 >= argc) throw ConfigError(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--out") out_dir = next();
+      else if (a == "--truth") truth_path = next();
+      else if (a == "--mode") {
+        const std::string m = next();
+        if (m != "3dof" && m != "6dof") throw ConfigError("--mode must be 3dof or 6dof, not " + m);
+        config.icp.six_dof = m == "6dof";
+      } else if (a == "--c-max") config.icp.c_max_m = std::stod(next());
+      else if (a == "--t-c") config.icp.t_c_m = std::stod(next());
+      else if (a == "--r-c-deg") config.icp.r_c_rad = std::stod(next()) * M_PI / 180.0;
+      else if (a == "--max-iterations") config.icp.max_iterations = std::stoi(next());
+      else if (a == "--max-points-per-voxel") config.max_points_per_voxel = std::stoi(next());
+      else if (a == "--scans") max_scans = std::stoul(next());
+      else if (a == "--source-voxel") config.source_voxel_m = std::stod(next());
+      else if (a == "--map-spacing") config.map_spacing_m = std::stod(next());
+      else if (a == "--quiet") quiet = true;
+      else if (a == "--no-accelerate") config.icp.accelerate = false;
+      else throw ConfigError("unknown option " + a);
+    }
+    config.validate();
+    const MapDirectory in(map_dir);
+    if (in.size() == 0) throw IoError(map_dir, "holds no scans (poses.csv missing or empty)");
+    std::vector<Pose2D> truth;
+    if (!truth_path.empty()) truth = readTruth(truth_path);
+    slam::IcpSlam slam(config, out_dir);
+    if (slam.scanCount() != 0) throw IoError(out_dir, "already holds scans; give an empty or new --out directory");
+    double total_s = 0.0, err_sum = 0.0;
+    size_t err_n = 0;
+    const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
+    for (size_t i = 0; i < n; ++i) {
+      const MapScanInfo& info = in.scans()[i];
+      const slam::Registration r = slam.registerScan(in.loadScan(i), info.odom_pose, info.sensor_origin, info.stamp_s);
+      total_s += r.time_s;
+      if (!quiet) {
+        std::printf("scan %3zu: (%7.3f %7.3f %7.2f deg) %s it %3d rms %5.1f mm %5.2f s", i, r.map_pose.x, r.map_pose.y,
+                    r.map_pose.yaw * 180.0 / M_PI, r.converged ? "ok    " : "FAILED", r.iterations, r.rms_m * 1000.0,
+                    r.time_s);
+        if (i < truth.size())
+          std::printf("  err %5.1f cm %5.2f deg (stored %5.1f cm, odometry %6.1f cm)", posErr(r.map_pose, truth[i]) * 100,
+                      yawErrDeg(r.map_pose, truth[i]), posErr(info.map_pose, truth[i]) * 100,
+                      posErr(info.odom_pose, truth[i]) * 100);
+        std::printf("\n");
+        if (!r.converged) std::printf("          %s\n", r.failure.c_str());
+      }
+      if (i < truth.size()) {
+        err_sum += posErr(r.map_pose, truth[i]);
+        ++err_n;
+      }
+    }
+    std::printf("%zu scans, %.2f s registration in all (%.2f s per scan)", n, total_s, total_s / n);
+    if (err_n > 0) {
+      const size_t last = std::min(n, truth.size()) - 1;
+      std::printf("; mean error %.1f cm; final error %.1f cm %.2f deg (odometry alone %.1f cm)", err_sum / err_n * 100,
+                  posErr(slam.lastMapPose(), truth[last]) * 100, yawErrDeg(slam.lastMapPose(), truth[last]),
+                  posErr(in.scans()[last].odom_pose, truth[last]) * 100);
+    }
+    std::printf("\n");
+  } catch (const std::exception& e) {
+    std::cerr << "icp_replay: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
