@@ -80,7 +80,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   pause_srv_ = nh_.advertiseService("mission/pause", &MissionNode::onPause, this);
   resume_srv_ = nh_.advertiseService("mission/resume", &MissionNode::onResume, this);
   abort_srv_ = nh_.advertiseService("mission/abort", &MissionNode::onAbort, this);
-  status_timer_ = nh_.createTimer(ros::Duration(1.0), &MissionNode::publishStatus, this);
+  status_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &MissionNode::publishStatus, this);
   if (autostart) {
     running_ = true;
     runner_ = std::thread(&MissionNode::runMission, this);
@@ -112,11 +112,11 @@ void MissionNode::runMission() {
   } catch (const std::exception& e) {
     ROS_ERROR("mission: could not write the report: %s", e.what());
   }
-  ros::TimerEvent none;
+  ros::WallTimerEvent none;
   publishStatus(none);
   running_ = false;
   if (shutdown_when_done_) {
-    ros::Duration(0.5).sleep();  // let the last status go out
+    ros::WallDuration(0.5).sleep();  // let the last status go out
     ros::shutdown();
   }
 }
@@ -156,7 +156,7 @@ bool MissionNode::onAbort(std_srvs::Trigger::Request&, std_srvs::Trigger::Respon
   return true;
 }
 
-void MissionNode::publishStatus(const ros::TimerEvent&) {
+void MissionNode::publishStatus(const ros::WallTimerEvent&) {
   const MissionState s = mission_->snapshot();
   scanstop_msgs::MissionStatus msg;
   msg.header.stamp = ros::Time::now();

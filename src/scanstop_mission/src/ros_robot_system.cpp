@@ -105,7 +105,7 @@ void RosRobotSystem::onGroundTruth(const nav_msgs::Odometry::ConstPtr& msg) {
 
 std::optional<Pose2D> RosRobotSystem::groundTruth() {
   // The simulator publishes the true pose after every step; give the last message a moment to arrive.
-  ros::Duration(0.05).sleep();
+  ros::WallDuration(0.05).sleep();
   std::lock_guard<std::mutex> lock(mutex_);
   return ground_truth_;
 }

@@ -27,7 +27,7 @@ class MissionNode {
   bool onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool onAbort(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
-  void publishStatus(const ros::TimerEvent&);
+  void publishStatus(const ros::WallTimerEvent&);
   void runMission();
 
   ros::NodeHandle nh_;
@@ -39,7 +39,7 @@ class MissionNode {
   std::atomic<bool> running_{false};
   ros::ServiceServer start_srv_, pause_srv_, resume_srv_, abort_srv_;
   ros::Publisher status_pub_;
-  ros::Timer status_timer_;
+  ros::WallTimer status_timer_;
 };
 
 }  // namespace mission
