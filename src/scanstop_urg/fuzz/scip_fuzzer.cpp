@@ -1,7 +1,8 @@
 // libFuzzer target for the SCIP 2.0 parser: arbitrary bytes go through the line splitter into
 // reply readers (GD scan, KEY:value) and the scan decoder, and through the URG and stepper
-// emulators' command parsers and the stepper reply parser. Any crash, sanitizer report or hang
-// is a bug. Build: see CMakeLists.txt (clang++ -fsanitize=fuzzer,address,undefined).
+// emulators' command parsers (whose replies and MD stream messages must parse back) and the
+// stepper reply parser. Any crash, sanitizer report or hang is a bug.
+// Build: see CMakeLists.txt (clang++ -fsanitize=fuzzer,address,undefined).
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -78,6 +79,21 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           __builtin_trap();  // the emulator produced a reply with a bad sum
         }
         if (!done) __builtin_trap();
+      }
+      if (urg.streaming()) {  // an MD/MS scan message must parse back too (status 99)
+        const std::string m = urg.nextStreamScan().bytes;
+        const std::string echo = m.substr(0, m.find('\n'));
+        LineSplitter back(4096);
+        ReplyReader reader(echo);
+        bool done = false;
+        try {
+          back.feed(m.data(), m.size(), [&](const std::string& l) {
+            if (!done) done = reader.feedLine(l);
+          });
+        } catch (const ScipError&) {
+          __builtin_trap();
+        }
+        if (!done || reader.reply().status() != "99") __builtin_trap();
       }
       (void)stepper.handleLine(line);
     });
