@@ -126,6 +126,9 @@ int meshMap(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--voxel") config.voxel_m = std::stod(argv[i + 1]);
     else if (a == "--out") out = argv[i + 1];
+    else if (a == "--smooth") config.smooth = std::string(argv[i + 1]) == "1";
+    else if (a == "--normal-radius") config.normal_radius_m = std::stod(argv[i + 1]);
+    else if (a == "--radii") config.radii_m = parseRadii(argv[i + 1]);
     else throw ConfigError("unknown option " + a);
   }
   const double t0 = now();
@@ -137,7 +140,11 @@ int meshMap(int argc, char** argv) {
   for (double x : r.radii_m) std::printf(" %.4f", x);
   std::printf(" m\n");
   printRow("ours (voxels, normals, BPA)", r.seconds, r.mesh, nullptr);
-  std::printf("%-34s %9.3f s\n", "  of which Ball Pivoting", r.bpa_seconds);
+  std::printf("%-34s %9.3f s\n", "  voxels, spacing, normals", r.prepare_seconds);
+  std::printf("%-34s %9.3f s (triangles after each radius:", "  Ball Pivoting", r.bpa_seconds);
+  for (size_t n : r.stats.triangles_per_radius) std::printf(" %zu", n);
+  std::printf("; %zu seeds, %zu pinches, %zu triangles dropped)\n", r.stats.seeds, r.stats.pinches,
+              r.stats.dropped_triangles);
   if (!out.empty()) writeMesh(out, r.mesh);
   return 0;
 }

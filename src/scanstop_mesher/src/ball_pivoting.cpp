@@ -18,7 +18,6 @@ enum : uint8_t {
 };
 
 constexpr uint64_t kEmptyKey = std::numeric_limits<uint64_t>::max();
-constexpr double kTwoPi = 2.0 * M_PI;
 /// A point counts as inside a ball when its squared distance to the centre is below
 /// r^2 * (1 - kInsideEps): points on the sphere (co-circular samples) do not block it.
 constexpr double kInsideEps = 1e-7;
@@ -317,8 +316,13 @@ void BallPivoting::pivotEdge(int e) {
     Eigen::Vector3d c;
     if (!normalsAgree(i, q, j) || !ballCenter(i, q, j, c)) continue;
     const Eigen::Vector3d v = c - m;
-    double angle = std::atan2(axis.dot(u.cross(v)), u.dot(v));  // rotation about i->j, away from k
-    if (angle < 0.0) angle = angle > -1e-9 ? 0.0 : angle + kTwoPi;
+    // Rotation about i->j (away from k) from u to v, as a pseudo-angle in [0, 4) that orders like
+    // the angle in [0, 2 pi) (no atan2 needed for choosing the smallest).
+    const double y = axis.dot(u.cross(v)), x = u.dot(v);
+    const double l1 = std::abs(x) + std::abs(y);
+    if (!(l1 > 0.0)) continue;
+    double angle = y >= 0.0 ? (x >= 0.0 ? y / l1 : 1.0 - x / l1) : (x < 0.0 ? 2.0 - y / l1 : 3.0 + x / l1);
+    if (angle > 4.0 - 1e-9) angle = 0.0;  // on the current ball's sphere, within rounding
     candidates.push_back({angle, q, c});
   }
   std::sort(candidates.begin(), candidates.end(), [this, &m](const Candidate& a, const Candidate& b) {
@@ -354,31 +358,38 @@ void BallPivoting::processActive() {
 }
 
 bool BallPivoting::findSeed() {
+  // Bernardini et al.: seeds are looked for cell by cell (cells of the 2r grid), trying a few
+  // unused points per cell; a cell whose tries failed is not tried again in this pass.
+  constexpr int kTriesPerCell = 3;
   const std::vector<uint32_t>& order = grid_->cellOrder();
   const double r2 = radius_ * radius_;
-  std::vector<std::pair<double, int>> near;
-  while (seed_cursor_ < order.size()) {
-    const int v = static_cast<int>(order[seed_cursor_++]);
-    if (used_[v]) continue;
-    grid_->within(p_[v], 2.0 * radius_, scratch_);
-    near.clear();
-    for (uint32_t q : scratch_) {
-      if (static_cast<int>(q) == v || used_[q]) continue;
-      const double d2 = (p_[q] - p_[v]).squaredNorm();
-      if (d2 < 4.0 * r2) near.emplace_back(d2, static_cast<int>(q));
-    }
-    const size_t keep = std::min<size_t>(near.size(), 16);
-    std::partial_sort(near.begin(), near.begin() + keep, near.end());
-    for (size_t x = 0; x < keep; ++x)
-      for (size_t y = x + 1; y < keep; ++y) {
-        int a = near[x].second, b = near[y].second;
-        if ((p_[a] - p_[v]).cross(p_[b] - p_[v]).dot(n_[v]) < 0.0) std::swap(a, b);
-        if (!normalsAgree(v, a, b)) continue;
-        Eigen::Vector3d c;
-        if (!ballCenter(v, a, b, c) || !ballEmpty(c, scratch_, v, a, b)) continue;
-        addSeed(v, a, b, c);
-        return true;
+  std::vector<std::pair<double, int>>& near = seed_near_;
+  for (; seed_cursor_ < grid_->numCells(); ++seed_cursor_) {
+    int tries = 0;
+    for (uint32_t k = grid_->cellBegin(seed_cursor_); k < grid_->cellBegin(seed_cursor_ + 1) && tries < kTriesPerCell; ++k) {
+      const int v = static_cast<int>(order[k]);
+      if (used_[v]) continue;
+      ++tries;
+      grid_->within(p_[v], 2.0 * radius_, scratch_);
+      near.clear();
+      for (uint32_t q : scratch_) {
+        if (static_cast<int>(q) == v || used_[q]) continue;
+        const double d2 = (p_[q] - p_[v]).squaredNorm();
+        if (d2 < 4.0 * r2) near.emplace_back(d2, static_cast<int>(q));
       }
+      const size_t keep = std::min<size_t>(near.size(), 10);  // pairs among the 10 nearest
+      std::partial_sort(near.begin(), near.begin() + keep, near.end());
+      for (size_t x = 0; x < keep; ++x)
+        for (size_t y = x + 1; y < keep; ++y) {
+          int a = near[x].second, b = near[y].second;
+          if ((p_[a] - p_[v]).cross(p_[b] - p_[v]).dot(n_[v]) < 0.0) std::swap(a, b);
+          if (!normalsAgree(v, a, b)) continue;
+          Eigen::Vector3d c;
+          if (!ballCenter(v, a, b, c) || !ballEmpty(c, scratch_, v, a, b)) continue;
+          addSeed(v, a, b, c);
+          return true;  // the same cell is looked at again next time (it may hold more surface)
+        }
+    }
   }
   return false;
 }

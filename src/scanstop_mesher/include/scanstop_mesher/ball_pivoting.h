@@ -127,6 +127,7 @@ class BallPivoting {
     Eigen::Vector3d center;
   };
   std::vector<Candidate> candidates_;
+  std::vector<std::pair<double, int>> seed_near_;
   bool insertDirEdge(uint64_t key);
   bool hasDirEdge(uint64_t key) const;
 };

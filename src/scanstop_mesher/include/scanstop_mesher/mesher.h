@@ -40,14 +40,16 @@ ScanPoints voxelDownsample(const ScanPoints& in, double voxel_m);
 /// (0 when fewer than two points).
 double meanSpacing(const std::vector<Eigen::Vector3f>& points, size_t max_samples = 20000);
 
-/// The automatic radii for a mean point spacing [m]: 1.25, 2.5 and 5 times it... see the .cpp.
+/// The automatic radii for a mean point spacing [m]: 1.25, 2 and 3 times it.
 std::vector<double> automaticRadii(double spacing_m);
 
 /// Estimates each point's normal from the principal axes of its neighbours within radius_m [m]
 /// and turns it towards the point's scanner position. A point with fewer than min_neighbors
 /// neighbours, a line-like neighbourhood, or a normal perpendicular to its view direction gets
 /// NaN (it will be skipped, not guessed). Returns the number of usable normals.
-size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors);
+/// With project = true each point with a usable normal is also moved onto its neighbourhood's
+/// plane (removes range noise across the surface; thesis 8: the map accumulates every scan's noise).
+size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors, bool project = false);
 
 /// Pipeline settings.
 struct MesherConfig {
@@ -55,6 +57,7 @@ struct MesherConfig {
   double voxel_m = 0.0;              ///< voxel edge for downsampling [m]; 0 = none
   double normal_radius_m = 0.0;      ///< neighbourhood for normal estimation [m]; 0 = 3 x spacing
   int normal_min_neighbors = 5;      ///< neighbours a normal needs
+  bool smooth = true;                ///< move points onto their local plane when estimating normals
   /// Checks the values; throws ConfigError naming the field.
   void validate() const;
 };
@@ -69,6 +72,7 @@ struct MesherResult {
   double spacing_m = 0.0;    ///< mean point spacing after downsampling
   std::vector<double> radii_m;
   double seconds = 0.0;      ///< wall time of the whole pipeline
+  double prepare_seconds = 0.0;  ///< wall time of voxels, spacing and normals
   double bpa_seconds = 0.0;  ///< wall time of the Ball Pivoting passes
 };
 

@@ -52,6 +52,9 @@ class SpatialGrid {
 
   /// Point indices in cell order (spatially coherent), finite points only.
   const std::vector<uint32_t>& cellOrder() const { return order_; }
+  /// Number of cells; the points of cell c are cellOrder()[cellBegin(c) .. cellBegin(c + 1)).
+  size_t numCells() const { return start_.empty() ? 0 : start_.size() - 1; }
+  uint32_t cellBegin(size_t c) const { return start_[c]; }
 
  private:
   const std::vector<Eigen::Vector3d>& points_;
