@@ -273,6 +273,12 @@ void PioneerDriver::serve() {
           s.w_radps = status_.w_radps;
           s.motors_enabled = sip.motorsEnabled();
         }
+        if (!s.motors_enabled) {
+          // The motors were disabled (motor button, or the robot refused ENABLE at connect): enable
+          // them for the commanded motion; if they stay disabled, the motion aborts and says so.
+          client_->send(commandPacket(cmd::kEnable, 1));
+          log(1, "the robot reports its motors disabled: sending ENABLE before the motion");
+        }
         motion_ = std::make_unique<MotionController>(config_.motion, request.kind, request.target, s);
         std::lock_guard<std::mutex> lock(mutex_);
         request_.reset();

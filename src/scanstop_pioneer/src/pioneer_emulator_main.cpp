@@ -27,7 +27,8 @@ void usage() {
                "  --link PATH     keep a symlink PATH -> the pty slave (open PATH as the robot's port)\n"
                "  --control FIFO  create FIFO and read fault commands from it, one per line:\n"
                "                  corrupt N | drop N | garbage N | silence S | disconnect S | stall on|off |\n"
-               "                  encoder on|off | bump front|rear|off | still_open | battery V | status\n"
+               "                  encoder on|off | motors on|off | bump front|rear|off | still_open |\n"
+               "                  battery V | status\n"
                "  --start-open    start with a session left open by an earlier client (SIPs streaming)\n"
                "  --start-x/-y MM odometry counters at OPEN (e.g. 27400 to cross the 15-bit wrap soon)\n";
 }

@@ -111,7 +111,7 @@ void RobotEmulator::handle(const ClientCommand& c, double t) {
     case cmd::kPulse:
     case cmd::kOpen: break;
     case cmd::kClose: closeSession(); break;
-    case cmd::kEnable: motors_enabled_ = c.value != 0; break;
+    case cmd::kEnable: motors_enabled_ = c.value != 0 && !faults_.motor_power_off; break;
     case cmd::kVel: set_v_mps_ = v * 1e-3; break;
     case cmd::kRVel: set_w_radps_ = v * M_PI / 180.0; break;
     case cmd::kStop: set_v_mps_ = set_w_radps_ = 0.0; break;
@@ -260,6 +260,10 @@ std::string RobotEmulator::command(const std::string& line, double t) {
     faults_.stall = onOff();
   } else if (name == "encoder") {
     faults_.encoder = onOff();
+  } else if (name == "motors") {
+    // The motor power switch: off disables the motors and ignores ENABLE; on allows ENABLE again.
+    faults_.motor_power_off = !onOff();
+    if (faults_.motor_power_off) motors_enabled_ = false;
   } else if (name == "bump") {
     if (arg == "front") {
       faults_.front_bumpers = 0x04;
@@ -279,7 +283,7 @@ std::string RobotEmulator::command(const std::string& line, double t) {
   } else {
     throw std::invalid_argument("emulator command '" + line +
                                 "' not understood (corrupt N, drop N, garbage N, silence S, disconnect S, stall on|off, "
-                                "encoder on|off, bump front|rear|off, still_open, battery V, status)");
+                                "encoder on|off, motors on|off, bump front|rear|off, still_open, battery V, status)");
   }
   return "ok " + line;
 }

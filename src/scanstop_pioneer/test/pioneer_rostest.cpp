@@ -283,6 +283,19 @@ TEST(PioneerDriver, H_FrozenEncodersTimeOut) {
   inject("encoder off");
 }
 
+TEST(PioneerDriver, H2_MotorPowerOffIsReportedAndReEnabled) {
+  inject("motors off");
+  const auto f = forward(0.3);
+  EXPECT_FALSE(f.response.success);
+  EXPECT_FALSE(f.response.collision);
+  EXPECT_NE(f.response.message.find("motors disabled"), std::string::npos) << f.response.message;
+  ros::WallDuration(1.1).sleep();
+  EXPECT_EQ(g_diag->status.level, diagnostic_msgs::DiagnosticStatus::WARN) << g_diag->status.message;
+  inject("motors on");  // the switch is back on; the driver sends ENABLE for the next motion
+  const auto again = forward(0.2);
+  EXPECT_TRUE(again.response.success) << again.response.message;
+}
+
 TEST(PioneerDriver, I_SilenceDuringAMotionIsReportedAndRecovered) {
   const double losses = g_diag->number("link losses");
   auto call = std::async(std::launch::async, [] { return forward(1.0); });

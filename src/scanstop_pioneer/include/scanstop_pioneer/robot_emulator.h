@@ -41,6 +41,7 @@ struct EmulatorFaults {
   double silent_until = -1;   ///< [s] no output at all before this time (input still heard)
   bool stall = false;         ///< the wheels are blocked: no motion, stall flags while driven
   bool encoder = false;       ///< encoders frozen: the robot moves, odometry does not change
+  bool motor_power_off = false;  ///< motor power switched off: motors disabled, ENABLE has no effect
   uint8_t front_bumpers = 0;  ///< bumper bits 1..5 reported (front)
   uint8_t rear_bumpers = 0;   ///< (rear)
 };
@@ -59,7 +60,7 @@ class RobotEmulator {
   /// Puts the robot into the OPEN state as if an earlier client had left its session open.
   void leaveOpen(double t);
   /// Applies a text command: corrupt N | drop N | garbage N | silence S | stall on|off |
-  /// encoder on|off | bump front|rear|off | still_open | battery V | status. Returns a reply line;
+  /// encoder on|off | motors on|off | bump front|rear|off | still_open | battery V | status. Returns a reply line;
   /// throws std::invalid_argument naming the command that was not understood.
   std::string command(const std::string& line, double t);
 
