@@ -14,6 +14,18 @@ namespace scanstop {
 namespace pioneer {
 namespace {
 
+/// Every private parameter the node reads (readParameters and the frame parameters).
+const char* const kKnownParameters[] = {
+    "port", "baud", "odom_frame", "base_frame", "publish_tf", "robot/subclass", "robot/angle_conv",
+    "robot/dist_conv", "robot/vel_conv", "robot/range_conv", "robot/diff_conv", "robot/max_velocity",
+    "robot/max_rot_velocity", "reply_timeout", "sync_attempts", "close_wait", "sip_timeout", "reconnect_period",
+    "pulse_period", "cmd_vel_timeout", "max_linear_speed", "max_angular_speed", "motion/linear_speed",
+    "motion/angular_speed", "motion/min_linear_speed", "motion/min_angular_speed", "motion/linear_decel",
+    "motion/angular_decel", "motion/approach_distance", "motion/approach_angle", "motion/distance_tolerance",
+    "motion/angle_tolerance", "motion/timeout_factor", "motion/timeout_extra", "motion/stall_time",
+    "motion/motors_disabled_time", "motion/settle_timeout", "motion/max_forward", "motion/max_rotate",
+    "diagnostic_period"};
+
 template <typename T>
 void opt(const ros::NodeHandle& pnh, const std::string& name, T& value) {
   ros_params::optional(pnh, name, value);
@@ -69,8 +81,24 @@ DriverConfig PioneerDriverNode::readParameters(const ros::NodeHandle& pnh) {
   return c;
 }
 
+std::vector<std::string> PioneerDriverNode::unknownParameters(const ros::NodeHandle& pnh) {
+  std::vector<std::string> names, unknown;
+  ros::param::getParamNames(names);
+  const std::string prefix = pnh.getNamespace() + "/";
+  for (const std::string& name : names) {
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string key = name.substr(prefix.size());
+    bool known = false;
+    for (const char* k : kKnownParameters) known = known || key == k;
+    if (!known) unknown.push_back(name);
+  }
+  return unknown;
+}
+
 PioneerDriverNode::PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : updater_(nh, pnh) {
   const DriverConfig config = readParameters(pnh);
+  for (const std::string& name : unknownParameters(pnh))
+    ROS_WARN("pioneer_driver: unknown parameter '%s' is ignored (see config/pioneer.yaml for the names)", name.c_str());
   opt(pnh, "odom_frame", odom_frame_);
   opt(pnh, "base_frame", base_frame_);
   opt(pnh, "publish_tf", publish_tf_);

@@ -182,6 +182,9 @@ TEST(PioneerDriver, B_ConfigFileEqualsTheCodeDefaults) {
   EXPECT_DOUBLE_EQ(m.settle_timeout_s, dm.settle_timeout_s);
   EXPECT_DOUBLE_EQ(m.max_forward_m, dm.max_forward_m);
   EXPECT_NEAR(m.max_rotate_rad, dm.max_rotate_rad, 1e-4);
+  // Every key of config/pioneer.yaml is one the node reads (no typos).
+  const auto unknown = PioneerDriverNode::unknownParameters(ros::NodeHandle("/pioneer_driver"));
+  EXPECT_TRUE(unknown.empty()) << unknown.front();
   // A bad value is refused with the parameter's name.
   ros::NodeHandle bad("/bad_pioneer");
   bad.setParam("port", "/dev/null");
@@ -192,6 +195,10 @@ TEST(PioneerDriver, B_ConfigFileEqualsTheCodeDefaults) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("motion/linear_speed"), std::string::npos) << e.what();
   }
+  bad.setParam("motion/linear_sped", 0.1);
+  const auto typo = PioneerDriverNode::unknownParameters(bad);
+  ASSERT_EQ(typo.size(), 1u);
+  EXPECT_EQ(typo[0], "/bad_pioneer/motion/linear_sped");
 }
 
 TEST(PioneerDriver, C_RotateAndForward) {

@@ -12,6 +12,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "scanstop_pioneer/pioneer_driver.h"
 
@@ -26,6 +27,8 @@ class PioneerDriverNode {
 
   /// Fills a DriverConfig from the private parameters (defaults = the struct's defaults).
   static DriverConfig readParameters(const ros::NodeHandle& pnh);
+  /// Private parameters set on the server that the node does not know (typos in a config file).
+  static std::vector<std::string> unknownParameters(const ros::NodeHandle& pnh);
 
  private:
   void onSip(const DriverStatus& status);
