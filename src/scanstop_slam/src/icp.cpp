@@ -87,7 +87,7 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
     const int d[3] = {dx, dy, dz};
     float box2 = 0.0f;
     for (int a = 0; a < 3; ++a) {
-      const float g = d[a] < 0 ? lo[a] : (d[a] > 0 ? hi[a] : 0.0f);
+      const float g = d[a] < 0 ? lo[a] + (-d[a] - 1) * vs : (d[a] > 0 ? hi[a] + (d[a] - 1) * vs : 0.0f);
       box2 += g * g;
     }
     if (box2 >= best) return;
@@ -104,9 +104,11 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
     }
   };
   scan(0, 0, 0);
-  for (int dx = -1; dx <= 1; ++dx)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz)
+  // Rings of neighbour voxels out to the radius (one ring when radius <= voxel).
+  const int rings = std::max(1, static_cast<int>(std::ceil(radius_m / voxel_ - 1e-9)));
+  for (int dx = -rings; dx <= rings; ++dx)
+    for (int dy = -rings; dy <= rings; ++dy)
+      for (int dz = -rings; dz <= rings; ++dz)
         if (dx != 0 || dy != 0 || dz != 0) scan(dx, dy, dz);
   dist2 = best;
   return found;
@@ -179,7 +181,7 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   const long n = static_cast<long>(source.size());
   std::vector<Eigen::Vector3f> matched(source.size());
   std::vector<uint8_t> has(source.size(), 0);
-  const double c_max = std::min(config.c_max_m, target.voxelSize());
+  const double c_max = config.c_max_m;
   Eigen::Matrix<double, 6, 1> last_step = Eigen::Matrix<double, 6, 1>::Zero();
   const bool skip_horizontal = !config.six_dof && config.ignore_horizontal;
   Eigen::Matrix<double, 6, 1> last_params = params(T);

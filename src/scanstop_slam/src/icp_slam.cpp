@@ -9,6 +9,7 @@ namespace slam {
 
 void SlamConfig::validate() const {
   icp.validate();
+  requireInRange("coarse_c_max", coarse_c_max_m, 0.0, 5.0, "m");
   requireInRange("source_voxel", source_voxel_m, 0.0, 1.0, "m");
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
@@ -26,6 +27,11 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
   count_ = dir_->size();
 }
 
+std::vector<Eigen::Vector3f> IcpSlam::coarseSource(const std::vector<Eigen::Vector3f>& source) const {
+  // A sparser subset is plenty for the coarse stage and keeps its wider search cheap.
+  return voxelDownsample(source, std::max(config_.source_voxel_m, 0.05));
+}
+
 Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& odom_pose,
                                    const Eigen::Vector3d& sensor_origin, double stamp_s) {
   const auto start = std::chrono::steady_clock::now();
@@ -39,7 +45,30 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     r.map_pose = r.guess;
     r.converged = true;
   } else {
-    const IcpResult icp_result = icp(map_, source, r.guess.toIsometry3d(), config_.icp);
+    Eigen::Isometry3d start = r.guess.toIsometry3d();
+    int coarse_iterations = 0;
+    if (config_.coarse_c_max_m > config_.icp.c_max_m) {
+      // The coarse stage only moves the start; its own checks use the coarse distance.
+      IcpConfig coarse = config_.icp;
+      coarse.c_max_m = config_.coarse_c_max_m;
+      coarse.t_c_m = std::max(coarse.t_c_m, 0.002);
+      coarse.r_c_rad = std::max(coarse.r_c_rad, 0.1 * M_PI / 180.0);
+      const IcpResult c = icp(map_, coarseSource(source), start, coarse);
+      coarse_iterations = c.iterations;
+      if (c.converged) start = c.T_target_source;
+    }
+    IcpResult icp_result = icp(map_, source, start, config_.icp);
+    icp_result.iterations += coarse_iterations;
+    if (icp_result.converged) {
+      // The bound on the correction applies to the whole correction of the odometry guess.
+      const Eigen::Isometry3d correction = r.guess.toIsometry3d().inverse() * icp_result.T_target_source;
+      if (correction.translation().norm() > config_.icp.max_correction_m ||
+          Eigen::AngleAxisd(correction.linear()).angle() > config_.icp.max_correction_rad) {
+        icp_result.converged = false;
+        icp_result.failure = "the correction of the odometry guess (" + std::to_string(correction.translation().norm()) +
+                             " m) exceeds max_correction";
+      }
+    }
     r.converged = icp_result.converged;
     r.failure = icp_result.failure;
     r.iterations = icp_result.iterations;

@@ -39,6 +39,10 @@ class IcpSlamNode {
     ros_params::optional(pnh, "max_correction_angle", config.icp.max_correction_rad);
     ros_params::optional(pnh, "source_voxel", config.source_voxel_m);
     ros_params::optional(pnh, "max_points_per_voxel", config.max_points_per_voxel);
+    ros_params::optional(pnh, "map_spacing", config.map_spacing_m);
+    ros_params::optional(pnh, "coarse_c_max", config.coarse_c_max_m);
+    ros_params::optional(pnh, "accelerate", config.icp.accelerate);
+    ros_params::optional(pnh, "ignore_horizontal", config.icp.ignore_horizontal);
     ros_params::optional(pnh, "map_cloud_voxel", map_cloud_voxel_m_);
     ros_params::optional(pnh, "sensor_height", sensor_height_m_);
     ros_params::optional(pnh, "map_frame", map_frame_);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,17 +21,21 @@ namespace {
 
 void usage() {
   std::cerr << "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof]\n"
+               "                  [--coarse-c-max M (0 = single stage)]\n"
                "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
                "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n";
 }
 
-std::vector<Pose2D> readTruth(const std::string& path) {
-  std::vector<Pose2D> out;
+/// True poses by scan index (a scan the mission adopted after a crash may have none).
+std::vector<std::optional<Pose2D>> readTruth(const std::string& path) {
+  std::vector<std::optional<Pose2D>> out;
   const YAML::Node root = YAML::LoadFile(path);
+  if (!root["scans"]) throw IoError(path, "has no 'scans' list (not a mission_state.yaml?)");
   for (const auto& s : root["scans"]) {
+    const size_t index = s["index"].as<size_t>();
+    if (index >= out.size()) out.resize(index + 1);
     const auto p = s["true_pose"];
-    if (!p || p.size() != 3) throw IoError(path, "a scan without true_pose [x, y, yaw]");
-    out.emplace_back(p[0].as<double>(), p[1].as<double>(), p[2].as<double>());
+    if (p && p.size() == 3) out[index] = Pose2D(p[0].as<double>(), p[1].as<double>(), p[2].as<double>());
   }
   return out;
 }
@@ -63,6 +68,7 @@ int main(int argc, char** argv) {
         if (m != "3dof" && m != "6dof") throw ConfigError("--mode must be 3dof or 6dof, not " + m);
         config.icp.six_dof = m == "6dof";
       } else if (a == "--c-max") config.icp.c_max_m = std::stod(next());
+      else if (a == "--coarse-c-max") config.coarse_c_max_m = std::stod(next());
       else if (a == "--t-c") config.icp.t_c_m = std::stod(next());
       else if (a == "--r-c-deg") config.icp.r_c_rad = std::stod(next()) * M_PI / 180.0;
       else if (a == "--max-iterations") config.icp.max_iterations = std::stoi(next());
@@ -77,39 +83,42 @@ int main(int argc, char** argv) {
     config.validate();
     const MapDirectory in(map_dir);
     if (in.size() == 0) throw IoError(map_dir, "holds no scans (poses.csv missing or empty)");
-    std::vector<Pose2D> truth;
+    std::vector<std::optional<Pose2D>> truth;
     if (!truth_path.empty()) truth = readTruth(truth_path);
     slam::IcpSlam slam(config, out_dir);
     if (slam.scanCount() != 0) throw IoError(out_dir, "already holds scans; give an empty or new --out directory");
+    std::vector<Pose2D> poses;
     double total_s = 0.0, err_sum = 0.0;
-    size_t err_n = 0;
+    size_t err_n = 0, last_truth = 0;
     const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
     for (size_t i = 0; i < n; ++i) {
       const MapScanInfo& info = in.scans()[i];
       const slam::Registration r = slam.registerScan(in.loadScan(i), info.odom_pose, info.sensor_origin, info.stamp_s);
       total_s += r.time_s;
+      poses.push_back(r.map_pose);
       if (!quiet) {
         std::printf("scan %3zu: (%7.3f %7.3f %7.2f deg) %s it %3d rms %5.1f mm %5.2f s", i, r.map_pose.x, r.map_pose.y,
                     r.map_pose.yaw * 180.0 / M_PI, r.converged ? "ok    " : "FAILED", r.iterations, r.rms_m * 1000.0,
                     r.time_s);
-        if (i < truth.size())
-          std::printf("  err %5.1f cm %5.2f deg (stored %5.1f cm, odometry %6.1f cm)", posErr(r.map_pose, truth[i]) * 100,
-                      yawErrDeg(r.map_pose, truth[i]), posErr(info.map_pose, truth[i]) * 100,
-                      posErr(info.odom_pose, truth[i]) * 100);
+        if (i < truth.size() && truth[i])
+          std::printf("  err %5.1f cm %5.2f deg (stored %5.1f cm, odometry %6.1f cm)", posErr(r.map_pose, *truth[i]) * 100,
+                      yawErrDeg(r.map_pose, *truth[i]), posErr(info.map_pose, *truth[i]) * 100,
+                      posErr(info.odom_pose, *truth[i]) * 100);
         std::printf("\n");
         if (!r.converged) std::printf("          %s\n", r.failure.c_str());
       }
-      if (i < truth.size()) {
-        err_sum += posErr(r.map_pose, truth[i]);
+      if (i < truth.size() && truth[i]) {
+        err_sum += posErr(r.map_pose, *truth[i]);
         ++err_n;
+        last_truth = i;
       }
     }
     std::printf("%zu scans, %.2f s registration in all (%.2f s per scan)", n, total_s, total_s / n);
     if (err_n > 0) {
-      const size_t last = std::min(n, truth.size()) - 1;
-      std::printf("; mean error %.1f cm; final error %.1f cm %.2f deg (odometry alone %.1f cm)", err_sum / err_n * 100,
-                  posErr(slam.lastMapPose(), truth[last]) * 100, yawErrDeg(slam.lastMapPose(), truth[last]),
-                  posErr(in.scans()[last].odom_pose, truth[last]) * 100);
+      const size_t last = last_truth;
+      std::printf("; mean error %.1f cm; error of scan %zu %.1f cm %.2f deg (odometry alone %.1f cm)", err_sum / err_n * 100,
+                  last, posErr(poses[last], *truth[last]) * 100, yawErrDeg(poses[last], *truth[last]),
+                  posErr(in.scans()[last].odom_pose, *truth[last]) * 100);
     }
     std::printf("\n");
   } catch (const std::exception& e) {

@@ -27,7 +27,8 @@ class VoxelMap {
 
   /// Adds points (map frame); non-finite points are ignored.
   void add(const std::vector<Eigen::Vector3f>& points);
-  /// Nearest stored point within radius_m (<= voxel size) of q; false if none. horizontal (when
+  /// Nearest stored point within radius_m of q (exact; radius_m beyond the voxel size searches more
+  /// rings of voxels); false if none. horizontal (when
   /// given) tells whether that point's voxel holds a horizontal surface (floor, ceiling, table top).
   bool nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,
                bool* horizontal = nullptr) const;

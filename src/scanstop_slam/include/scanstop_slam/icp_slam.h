@@ -17,6 +17,10 @@ namespace slam {
 
 struct SlamConfig {
   IcpConfig icp;
+  /// Coarse-to-fine: first ICP with this correspondence distance (odometry can be off by more than
+  /// c_max after a long leg: 20 cm and 3 deg are common), then the thesis' c_max from there.
+  /// <= c_max: a single stage.
+  double coarse_c_max_m = 0.3;
   double source_voxel_m = 0.02;   ///< scan points used for matching: one per voxel of this size (0 = all) [m]
   int max_points_per_voxel = 30;  ///< map points kept per c_max voxel (bounds memory and query time)
   double map_spacing_m = 0.0;     ///< a map point joins only if none of its voxel is closer [m] (0 = first come)
@@ -58,6 +62,7 @@ class IcpSlam {
   const MapDirectory* mapDirectory() const { return dir_.get(); }
 
  private:
+  std::vector<Eigen::Vector3f> coarseSource(const std::vector<Eigen::Vector3f>& source) const;
   SlamConfig config_;
   VoxelMap map_;
   std::unique_ptr<MapDirectory> dir_;
