@@ -41,6 +41,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "map_voxel_m", c.map_voxel_m);
   ros_params::optional(pnh, "normal_radius_m", c.normal_radius_m);
   ros_params::optional(pnh, "normal_min_neighbors", c.normal_min_neighbors);
+  ros_params::optional(pnh, "smooth", c.smooth);
   ros_params::optional(pnh, "color_mode", c.color_mode);
   ros_params::optional(pnh, "max_triangles_per_marker", c.max_triangles_per_marker);
   ros_params::optional(pnh, "load_mesh", c.load_mesh);
@@ -90,6 +91,7 @@ bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop
     mc.radii_m.assign(req.radii.begin(), req.radii.end());
     mc.normal_radius_m = config_.normal_radius_m;
     mc.normal_min_neighbors = config_.normal_min_neighbors;
+    mc.smooth = config_.smooth;
     ScanPoints points;
     std::string source;
     if (req.input_path.empty()) {

@@ -1,4 +1,4 @@
-/// bpa_mesh INPUT OUTPUT [--radii r1,r2,...] [--voxel m] [--viewpoint x,y,z] [--json]
+/// bpa_mesh INPUT OUTPUT [--radii r1,r2,...] [--voxel m] [--viewpoint x,y,z] [--no-smooth] [--json]
 /// Ball Pivoting of a PLY/PCD/XYZ cloud (normals used as given; else estimated and turned towards
 /// the viewpoint) or of a map directory (poses.csv + scans/), written as .stl (binary) or .ply.
 #include <sys/stat.h>
@@ -21,12 +21,13 @@ namespace {
 
 int usage(const std::string& problem) {
   std::cerr << "bpa_mesh: " << problem << "\n"
-            << "usage: bpa_mesh INPUT OUTPUT [--radii r1,r2,...] [--voxel m] [--viewpoint x,y,z] [--json]\n"
+            << "usage: bpa_mesh INPUT OUTPUT [--radii r1,r2,...] [--voxel m] [--viewpoint x,y,z] [--no-smooth] [--json]\n"
             << "  INPUT   .ply/.pcd/.xyz cloud, or a map directory (poses.csv + scans/)\n"
             << "  OUTPUT  .stl (binary) or .ply (binary, with normals)\n"
             << "  --radii      increasing ball radii [m] (default: automatic from the point spacing)\n"
             << "  --voxel      voxel edge for downsampling [m] (default 0 = none)\n"
             << "  --viewpoint  scanner position for clouds without normals [m] (default 0,0,0)\n"
+            << "  --no-smooth  keep estimated-normal points where they are (default: moved onto their local plane)\n"
             << "  --json       print the result as one JSON object\n";
   return 2;
 }
@@ -68,6 +69,8 @@ int main(int argc, char** argv) {
         if (std::sscanf(v.c_str(), "%f,%f,%f%c", &x, &y, &z, &tail) != 3)
           throw ConfigError("--viewpoint: '" + v + "' is not x,y,z");
         viewpoint = Eigen::Vector3f(x, y, z);
+      } else if (a == "--no-smooth") {
+        config.smooth = false;
       } else if (a == "--json") {
         json = true;
       } else if (a == "-h" || a == "--help") {

@@ -26,6 +26,7 @@ struct MesherNodeConfig {
   double map_voxel_m = 0.01;           ///< voxel [m] for the map when the request gives 0 (0 = none)
   double normal_radius_m = 0.0;        ///< [m]; 0 = 3 x point spacing
   int normal_min_neighbors = 5;
+  bool smooth = true;                  ///< move points onto their local plane when estimating normals
   std::string color_mode = "height";   ///< "height" or "normal"
   int max_triangles_per_marker = 100000;
   std::string load_mesh;               ///< mesh (.stl/.ply) to show ("" = none); reloaded when it changes
