@@ -100,10 +100,12 @@ bool BallPivoting::hasDirEdge(uint64_t key) const {
 
 bool BallPivoting::edgeUsed(int a, int b) const { return hasDirEdge(edgeKey(a, b)); }
 
-bool BallPivoting::ballCenter(int a, int b, int c, Eigen::Vector3d& center) const {
+bool BallPivoting::ballCenter(int a, int b, int c, Eigen::Vector3d& center, bool check_normals) const {
   const Eigen::Vector3d ab = p_[b] - p_[a];
   const Eigen::Vector3d ac = p_[c] - p_[a];
   const Eigen::Vector3d n = ab.cross(ac);
+  // The triangle (a, b, c) faces along n: each corner's normal must agree.
+  if (check_normals && !(n.dot(n_[a]) > 0.0 && n.dot(n_[b]) > 0.0 && n.dot(n_[c]) > 0.0)) return false;
   const double n2 = n.squaredNorm();
   const double ab2 = ab.squaredNorm(), ac2 = ac.squaredNorm();
   if (!(n2 > 1e-12 * ab2 * ac2)) return false;  // (nearly) collinear or coincident corners
@@ -112,11 +114,6 @@ bool BallPivoting::ballCenter(int a, int b, int c, Eigen::Vector3d& center) cons
   if (h2 < 0.0) return false;  // no ball of this radius touches the three points
   center = cc + std::sqrt(h2 / n2) * n;
   return true;
-}
-
-bool BallPivoting::normalsAgree(int a, int b, int c) const {
-  const Eigen::Vector3d n = (p_[b] - p_[a]).cross(p_[c] - p_[a]);
-  return n.dot(n_[a]) > 0.0 && n.dot(n_[b]) > 0.0 && n.dot(n_[c]) > 0.0;
 }
 
 bool BallPivoting::ballEmpty(const Eigen::Vector3d& center, const std::vector<uint32_t>& candidates, int a, int b,
@@ -314,7 +311,7 @@ void BallPivoting::pivotEdge(int e) {
     if (q == i || q == j || q == k) continue;
     if ((p_[q] - p_[i]).squaredNorm() > reach2 || (p_[q] - p_[j]).squaredNorm() > reach2) continue;
     Eigen::Vector3d c;
-    if (!normalsAgree(i, q, j) || !ballCenter(i, q, j, c)) continue;
+    if (!ballCenter(i, q, j, c, true)) continue;
     const Eigen::Vector3d v = c - m;
     // Rotation about i->j (away from k) from u to v, as a pseudo-angle in [0, 4) that orders like
     // the angle in [0, 2 pi) (no atan2 needed for choosing the smallest).
@@ -383,9 +380,8 @@ bool BallPivoting::findSeed() {
         for (size_t y = x + 1; y < keep; ++y) {
           int a = near[x].second, b = near[y].second;
           if ((p_[a] - p_[v]).cross(p_[b] - p_[v]).dot(n_[v]) < 0.0) std::swap(a, b);
-          if (!normalsAgree(v, a, b)) continue;
           Eigen::Vector3d c;
-          if (!ballCenter(v, a, b, c) || !ballEmpty(c, scratch_, v, a, b)) continue;
+          if (!ballCenter(v, a, b, c, true) || !ballEmpty(c, scratch_, v, a, b)) continue;
           addSeed(v, a, b, c);
           return true;  // the same cell is looked at again next time (it may hold more surface)
         }
@@ -408,7 +404,7 @@ void BallPivoting::pivot(double radius_m) {
   for (size_t e = 0; e < edges_.size(); ++e) {
     Edge& E = edges_[e];
     if (E.state == kRemoved) continue;
-    if (ballCenter(E.a, E.b, E.opp, E.center)) {
+    if (ballCenter(E.a, E.b, E.opp, E.center, false)) {
       E.state = kActive;
       active_.push_back(static_cast<int>(e));
     } else {

@@ -86,9 +86,10 @@ class BallPivoting {
     uint8_t state;  ///< see .cpp
   };
 
-  bool ballCenter(int a, int b, int c, Eigen::Vector3d& center) const;
+  /// Centre of the ball of the current radius on the side of triangle (a, b, c)'s normal; false
+  /// when there is none (or, with check_normals, when a corner's normal disagrees).
+  bool ballCenter(int a, int b, int c, Eigen::Vector3d& center, bool check_normals) const;
   bool ballEmpty(const Eigen::Vector3d& center, const std::vector<uint32_t>& candidates, int a, int b, int c) const;
-  bool normalsAgree(int a, int b, int c) const;
   bool findSeed();
   void addSeed(int a, int b, int c, const Eigen::Vector3d& center);
   void pivotEdge(int e);
