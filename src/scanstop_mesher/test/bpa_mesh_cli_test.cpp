@@ -1,0 +1,96 @@
+// The bpa_mesh command-line tool: counts as JSON, the files it writes, exit codes and messages.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <string>
+
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/shared_data.h"
+
+using namespace scanstop;
+
+namespace {
+
+struct CliRun {
+  int status = -1;
+  std::string out;  ///< stdout and stderr
+};
+
+CliRun run(const std::string& args) {
+  CliRun r;
+  const std::string cmd = std::string(BPA_MESH_EXE) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int st = pclose(p);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+/// The number after "key": in a flat JSON object (-1 when missing).
+long jsonNumber(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return -1;
+  return std::stol(json.substr(at + key.size() + 4));
+}
+
+struct TempDir {
+  std::string path;
+  TempDir() {
+    char pattern[] = "/tmp/bpa_mesh_cli_test_XXXXXX";
+    path = mkdtemp(pattern);
+  }
+  ~TempDir() {
+    if (std::system(("rm -rf '" + path + "'").c_str()) != 0) std::perror("rm");
+  }
+};
+
+}  // namespace
+
+TEST(BpaMeshCli, MeshesACloudWithNormalsAndPrintsJson) {
+  TempDir tmp;
+  const std::string in = sharedDataPath("clouds/bun0.pcd");  // 397 points with normals
+  const CliRun r = run("'" + in + "' '" + tmp.path + "/bun0.stl' --radii 0.007,0.014 --json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << "one line: " << r.out;
+  EXPECT_EQ(jsonNumber(r.out, "input_points"), 397);
+  EXPECT_EQ(jsonNumber(r.out, "points"), 397);
+  const long triangles = jsonNumber(r.out, "triangles");
+  EXPECT_GT(triangles, 300);
+  EXPECT_EQ(jsonNumber(r.out, "nonmanifold_edges"), 0);
+  EXPECT_EQ(jsonNumber(r.out, "nonmanifold_vertices"), 0);
+  EXPECT_NE(r.out.find("\"radii_m\": [0.007,0.014]"), std::string::npos) << r.out;
+  EXPECT_EQ(static_cast<long>(readMesh(tmp.path + "/bun0.stl").faces.size()), triangles);
+
+  const CliRun text = run("'" + in + "' '" + tmp.path + "/bun0.ply'");  // automatic radii, PLY
+  ASSERT_EQ(text.status, 0) << text.out;
+  EXPECT_NE(text.out.find("non-manifold: 0 edges, 0 vertices"), std::string::npos) << text.out;
+  const TriangleMesh ply = readMesh(tmp.path + "/bun0.ply");
+  EXPECT_GT(ply.faces.size(), 300u);
+  EXPECT_EQ(ply.normals.size(), ply.vertices.size());
+}
+
+TEST(BpaMeshCli, BadArgumentsAndFilesAreNamed) {
+  TempDir tmp;
+  const std::string in = sharedDataPath("clouds/bun0.pcd");
+  CliRun r = run("'" + in + "' " + tmp.path + "/x.ply --radii 0.01,abc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("'abc'"), std::string::npos) << r.out;
+  r = run("'" + in + "' " + tmp.path + "/x.obj");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("x.obj"), std::string::npos) << r.out;
+  r = run(tmp.path + "/missing.pcd " + tmp.path + "/x.ply");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("missing.pcd"), std::string::npos) << r.out;
+  r = run("'" + in + "' " + tmp.path + "/x.ply --voxel -1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("voxel_m"), std::string::npos) << r.out;
+  r = run("'" + in + "'");
+  EXPECT_EQ(r.status, 2);
+}
