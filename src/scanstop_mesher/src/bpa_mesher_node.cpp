@@ -23,6 +23,7 @@ void MesherNodeConfig::validate() const {
   requireInRange("normal_min_neighbors", normal_min_neighbors, 3, 1000);
   requireOneOf("color_mode", color_mode, {"height", "normal"});
   requireInRange("max_triangles_per_marker", max_triangles_per_marker, 1, 10000000);
+  requireInRange("max_display_triangles", max_display_triangles, 1, 100000000);
   requireNonNegative("map_cloud_voxel_m", map_cloud_voxel_m, "m");
   requirePositive("map_poll_s", map_poll_s, "s");
   if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
@@ -44,6 +45,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "smooth", c.smooth);
   ros_params::optional(pnh, "color_mode", c.color_mode);
   ros_params::optional(pnh, "max_triangles_per_marker", c.max_triangles_per_marker);
+  ros_params::optional(pnh, "max_display_triangles", c.max_display_triangles);
   ros_params::optional(pnh, "load_mesh", c.load_mesh);
   ros_params::optional(pnh, "publish_map", c.publish_map);
   ros_params::optional(pnh, "map_cloud_voxel_m", c.map_cloud_voxel_m);
@@ -128,8 +130,13 @@ bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop
 }
 
 void BpaMesherNode::publishMesh(const TriangleMesh& mesh) {
+  if (mesh.faces.size() > static_cast<size_t>(config_.max_display_triangles))
+    ROS_INFO("bpa_mesher_node: %zu triangles: showing every %zu-th (max_display_triangles = %d)", mesh.faces.size(),
+             (mesh.faces.size() + config_.max_display_triangles - 1) / config_.max_display_triangles,
+             config_.max_display_triangles);
   marker_pub_.publish(meshToMarkers(mesh, config_.frame_id, ros::Time::now(), coloring_,
-                                    static_cast<size_t>(config_.max_triangles_per_marker)));
+                                    static_cast<size_t>(config_.max_triangles_per_marker),
+                                    static_cast<size_t>(config_.max_display_triangles)));
 }
 
 void BpaMesherNode::onMapTimer(const ros::WallTimerEvent&) {

@@ -28,7 +28,8 @@ MeshColoring parseColoring(const std::string& value, const std::string& paramete
 }
 
 visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const std::string& frame_id,
-                                              const ros::Time& stamp, MeshColoring coloring, size_t max_triangles) {
+                                              const ros::Time& stamp, MeshColoring coloring, size_t max_triangles,
+                                              size_t max_total) {
   visualization_msgs::MarkerArray out;
   visualization_msgs::Marker clear;
   clear.header.frame_id = frame_id;
@@ -75,8 +76,12 @@ visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const st
       }
     }
   }
-  for (size_t first = 0, id = 0; first < mesh.faces.size(); first += max_triangles, ++id) {
-    const size_t last = std::min(mesh.faces.size(), first + max_triangles);
+  const size_t stride = max_total > 0 ? (mesh.faces.size() + max_total - 1) / max_total : 1;
+  std::vector<size_t> shown;
+  shown.reserve(mesh.faces.size() / stride + 1);
+  for (size_t f = 0; f < mesh.faces.size(); f += stride) shown.push_back(f);
+  for (size_t first = 0, id = 0; first < shown.size(); first += max_triangles, ++id) {
+    const size_t last = std::min(shown.size(), first + max_triangles);
     visualization_msgs::Marker m;
     m.header.frame_id = frame_id;
     m.header.stamp = stamp;
@@ -89,15 +94,16 @@ visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const st
     m.color.r = m.color.g = m.color.b = m.color.a = 1.0f;
     m.points.reserve(3 * (last - first));
     m.colors.reserve(3 * (last - first));
-    for (size_t f = first; f < last; ++f)
+    for (size_t s = first; s < last; ++s)
       for (int k = 0; k < 3; ++k) {
-        const Eigen::Vector3f& v = mesh.vertices[mesh.faces[f][k]];
+        const int vi = mesh.faces[shown[s]][k];
+        const Eigen::Vector3f& v = mesh.vertices[vi];
         geometry_msgs::Point p;
         p.x = v.x();
         p.y = v.y();
         p.z = v.z();
         m.points.push_back(p);
-        m.colors.push_back(colors[mesh.faces[f][k]]);
+        m.colors.push_back(colors[vi]);
       }
     out.markers.push_back(std::move(m));
   }

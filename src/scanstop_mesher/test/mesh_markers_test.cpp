@@ -42,6 +42,16 @@ TEST(MeshMarkers, SplitsLargeMeshesAndClearsFirst) {
   EXPECT_GT(arr.markers[3].colors.back().r, 0.9f);
 }
 
+TEST(MeshMarkers, LargeMeshesShowEveryKthTriangle) {
+  const TriangleMesh m = strip(25);
+  const auto arr = meshToMarkers(m, "map", ros::Time(1.0), MeshColoring::kHeight, 4, 10);  // k = 3
+  size_t triangles = 0;
+  for (size_t k = 1; k < arr.markers.size(); ++k) triangles += arr.markers[k].points.size() / 3;
+  EXPECT_EQ(triangles, 9u);  // faces 0, 3, ..., 24
+  EXPECT_EQ(arr.markers.size(), 4u);  // DELETEALL + 4 + 4 + 1
+  EXPECT_FLOAT_EQ(arr.markers[1].points[3].x, 0.3f);  // first corner of face 3 = vertex 3
+}
+
 TEST(MeshMarkers, NormalColouringAndBadMode) {
   const auto arr = meshToMarkers(strip(3), "map", ros::Time(1.0), MeshColoring::kNormal, 100);
   ASSERT_EQ(arr.markers.size(), 2u);

@@ -29,6 +29,7 @@ struct MesherNodeConfig {
   bool smooth = true;                  ///< move points onto their local plane when estimating normals
   std::string color_mode = "height";   ///< "height" or "normal"
   int max_triangles_per_marker = 100000;
+  int max_display_triangles = 2000000; ///< larger meshes are shown by every k-th triangle (files keep all)
   std::string load_mesh;               ///< mesh (.stl/.ply) to show ("" = none); reloaded when it changes
   bool publish_map = false;            ///< publish map_dir's points, path, scan poses and base_link (viewing)
   double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)

@@ -19,9 +19,11 @@ MeshColoring parseColoring(const std::string& value, const std::string& paramete
 /// The mesh as TRIANGLE_LIST markers of at most max_triangles each (namespace "mesh", ids 0..),
 /// preceded by a DELETEALL marker that clears an earlier, larger mesh. Height colours run from
 /// blue (2nd percentile of the vertex heights) to red (98th percentile); normal colours are
-/// |n| as RGB. Frame frame_id, points in metres.
+/// |n| as RGB. Frame frame_id, points in metres. A mesh of more than max_total triangles is shown
+/// by every k-th triangle (k = ceil(faces / max_total); 0 = no limit) to keep the messages small.
 visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const std::string& frame_id,
-                                              const ros::Time& stamp, MeshColoring coloring, size_t max_triangles);
+                                              const ros::Time& stamp, MeshColoring coloring, size_t max_triangles,
+                                              size_t max_total = 0);
 
 }  // namespace mesher
 }  // namespace scanstop
