@@ -143,8 +143,10 @@ int meshMap(int argc, char** argv) {
   std::printf("%-34s %9.3f s\n", "  voxels, spacing, normals", r.prepare_seconds);
   std::printf("%-34s %9.3f s (triangles after each radius:", "  Ball Pivoting", r.bpa_seconds);
   for (size_t n : r.stats.triangles_per_radius) std::printf(" %zu", n);
-  std::printf("; %zu seeds, %zu pinches, %zu triangles dropped)\n", r.stats.seeds, r.stats.pinches,
-              r.stats.dropped_triangles);
+  std::printf("; %zu seeds, %zu pivots, %zu pinches, %zu triangles dropped; seconds per radius:", r.stats.seeds,
+              r.stats.pivots, r.stats.pinches, r.stats.dropped_triangles);
+  for (double s : r.stats.seconds_per_radius) std::printf(" %.2f", s);
+  std::printf(")\n");
   if (!out.empty()) writeMesh(out, r.mesh);
   return 0;
 }

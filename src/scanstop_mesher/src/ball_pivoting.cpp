@@ -3,6 +3,7 @@
 #include "scanstop_mesher/mesh_analysis.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -268,7 +269,10 @@ void BallPivoting::join(int e, int q, const Eigen::Vector3d& center) {
   const int i = E.a, j = E.b;
   const int glue_iq = used_[q] ? findFront(q, i) : -1;  // front edge q -> i meets the new i -> q
   const int glue_qj = used_[q] ? findFront(j, q) : -1;  // front edge j -> q meets the new q -> j
-  if (used_[q] && glue_iq < 0 && glue_qj < 0) ++stats_.pinches;
+  if (used_[q] && glue_iq < 0 && glue_qj < 0) {
+    ++stats_.pinches;
+    pinched_.push_back(q);
+  }
 
   addFace(i, q, j);
   removeEdge(e);
@@ -396,6 +400,7 @@ void BallPivoting::pivot(double radius_m) {
   if (radius_m < radius_)
     throw std::invalid_argument("BallPivoting: radii must increase (" + std::to_string(radius_m) + " after " +
                                 std::to_string(radius_) + ")");
+  const auto t0 = std::chrono::steady_clock::now();
   radius_ = radius_m;
   grid_ = std::make_unique<SpatialGrid>(p_, 2.0 * radius_);
   // Thesis 7.4: the boundary of the surface so far becomes active again for the new radius.
@@ -416,11 +421,17 @@ void BallPivoting::pivot(double radius_m) {
   while (findSeed());
   stats_.triangles = faces_.size();
   stats_.triangles_per_radius.push_back(faces_.size());
+  stats_.seconds_per_radius.push_back(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
 TriangleMesh BallPivoting::mesh() {
   std::vector<Eigen::Vector3i> faces = faces_;
-  stats_.dropped_triangles = dropPinchedFans(faces, p_.size());
+  // Only a pinch gives a vertex a second fan.
+  std::vector<int> pinched = pinched_;
+  std::sort(pinched.begin(), pinched.end());
+  pinched.erase(std::unique(pinched.begin(), pinched.end()), pinched.end());
+  stats_.dropped_triangles = dropPinchedFans(faces, p_.size(), pinched);
   stats_.triangles = faces.size();
   TriangleMesh mesh;
   std::vector<int> index(p_.size(), -1);

@@ -189,6 +189,63 @@ size_t dropPinchedFans(std::vector<Eigen::Vector3i>& faces, size_t num_vertices)
   }
 }
 
+size_t dropPinchedFans(std::vector<Eigen::Vector3i>& faces, size_t num_vertices, std::vector<int> candidates) {
+  size_t removed = 0;
+  std::vector<uint8_t> flag(num_vertices, 0);
+  std::vector<std::pair<int, int>> incident;  // (vertex, face)
+  std::vector<std::pair<int, int>> spokes;
+  std::vector<int> parent, size;
+  while (!candidates.empty()) {
+    for (int v : candidates) flag[v] = 1;
+    incident.clear();
+    for (size_t fi = 0; fi < faces.size(); ++fi)
+      for (int k = 0; k < 3; ++k)
+        if (flag[faces[fi][k]]) incident.emplace_back(faces[fi][k], static_cast<int>(fi));
+    for (int v : candidates) flag[v] = 0;
+    std::sort(incident.begin(), incident.end());
+    std::vector<uint8_t> drop(faces.size(), 0);
+    std::vector<int> next;
+    for (size_t s = 0; s < incident.size();) {
+      size_t e = s;
+      while (e < incident.size() && incident[e].first == incident[s].first) ++e;
+      const int v = incident[s].first, n = static_cast<int>(e - s);
+      spokes.clear();
+      parent.resize(n);
+      std::iota(parent.begin(), parent.end(), 0);
+      for (int l = 0; l < n; ++l) {
+        const auto& f = faces[incident[s + l].second];
+        for (int k = 0; k < 3; ++k)
+          if (f[k] != v) spokes.emplace_back(f[k], l);
+      }
+      std::sort(spokes.begin(), spokes.end());
+      auto find = [&parent](int x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+      };
+      for (size_t t = 1; t < spokes.size(); ++t)
+        if (spokes[t].first == spokes[t - 1].first) parent[find(spokes[t].second)] = find(spokes[t - 1].second);
+      size.assign(n, 0);
+      for (int l = 0; l < n; ++l) ++size[find(l)];
+      const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
+      for (int l = 0; l < n; ++l)
+        if (find(l) != keep && !drop[incident[s + l].second]) {
+          drop[incident[s + l].second] = 1;
+          for (int k = 0; k < 3; ++k) next.push_back(faces[incident[s + l].second][k]);
+        }
+      s = e;
+    }
+    size_t w = 0;
+    for (size_t fi = 0; fi < faces.size(); ++fi)
+      if (!drop[fi]) faces[w++] = faces[fi];
+    removed += faces.size() - w;
+    faces.resize(w);
+    std::sort(next.begin(), next.end());
+    next.erase(std::unique(next.begin(), next.end()), next.end());
+    candidates.swap(next);
+  }
+  return removed;
+}
+
 SurfaceDistance distanceToSurface(const std::vector<Eigen::Vector3f>& samples, const TriangleMesh& reference) {
   SurfaceDistance result;
   if (samples.empty() || reference.faces.empty()) return result;

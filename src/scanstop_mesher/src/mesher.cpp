@@ -146,30 +146,35 @@ size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors, bool
   SpatialGrid grid(p, radius_m);
   pts.normals.assign(p.size(), Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
   size_t usable = 0;
-  std::vector<uint32_t> nb;
   std::vector<Eigen::Vector3f> projected = pts.points;
-  for (size_t i = 0; i < p.size(); ++i) {
-    grid.within(p[i], radius_m, nb);
-    if (static_cast<int>(nb.size()) < min_neighbors) continue;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (uint32_t j : nb) mean += p[j];
-    mean /= double(nb.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (uint32_t j : nb) {
-      const Eigen::Vector3d d = p[j] - mean;
-      cov += d * d.transpose();
+  const long n_points = static_cast<long>(p.size());
+#pragma omp parallel reduction(+ : usable)
+  {
+    std::vector<uint32_t> nb;
+#pragma omp for schedule(dynamic, 4096)
+    for (long i = 0; i < n_points; ++i) {
+      grid.within(p[i], radius_m, nb);
+      if (static_cast<int>(nb.size()) < min_neighbors) continue;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (uint32_t j : nb) mean += p[j];
+      mean /= double(nb.size());
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (uint32_t j : nb) {
+        const Eigen::Vector3d d = p[j] - mean;
+        cov += d * d.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+      const Eigen::Vector3d ev = es.eigenvalues();  // increasing
+      if (!(ev[1] > 1e-3 * ev[2])) continue;         // a line (e.g. one scan row): no plane to take
+      Eigen::Vector3d n = es.eigenvectors().col(0);
+      const Eigen::Vector3d to_scanner = pts.origins[pts.view[i]].cast<double>() - p[i];
+      const double c = n.dot(to_scanner) / std::max(to_scanner.norm(), 1e-12);
+      if (std::abs(c) < 0.02) continue;  // seen edge-on: the side is unknown
+      if (c < 0) n = -n;
+      pts.normals[i] = n.cast<float>();
+      if (project) projected[i] = (p[i] - n * n.dot(p[i] - mean)).cast<float>();
+      ++usable;
     }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-    const Eigen::Vector3d ev = es.eigenvalues();  // increasing
-    if (!(ev[1] > 1e-3 * ev[2])) continue;         // a line (e.g. one scan row): no plane to take
-    Eigen::Vector3d n = es.eigenvectors().col(0);
-    const Eigen::Vector3d to_scanner = pts.origins[pts.view[i]].cast<double>() - p[i];
-    const double c = n.dot(to_scanner) / std::max(to_scanner.norm(), 1e-12);
-    if (std::abs(c) < 0.02) continue;  // seen edge-on: the side is unknown
-    if (c < 0) n = -n;
-    pts.normals[i] = n.cast<float>();
-    if (project) projected[i] = (p[i] - n * n.dot(p[i] - mean)).cast<float>();
-    ++usable;
   }
   if (project) pts.points.swap(projected);
   return usable;

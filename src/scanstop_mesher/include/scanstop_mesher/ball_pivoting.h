@@ -47,6 +47,7 @@ struct BpaStats {
   size_t pinches = 0;               ///< joins at a front vertex outside the pivot edge's fan
   size_t dropped_triangles = 0;     ///< triangles dropped by mesh() at vertices still pinched
   std::vector<size_t> triangles_per_radius;  ///< triangles after each pass
+  std::vector<double> seconds_per_radius;    ///< wall time of each pass [s]
 };
 
 /// One Ball Pivoting surface on a fixed point set. Call pivot(r) with increasing radii.
@@ -114,6 +115,7 @@ class BallPivoting {
   std::vector<int> active_;    ///< queue of edge ids (FIFO via head_)
   size_t head_ = 0;
   std::vector<Eigen::Vector3i> faces_;
+  std::vector<int> pinched_;   ///< vertices that were pinched (some may have healed)
   std::vector<uint64_t> dir_edges_;  ///< hash set of directed edges (open addressing)
   size_t dir_edge_count_ = 0;
   double radius_ = 0.0;

@@ -33,6 +33,9 @@ MeshTopology analyzeTopology(const TriangleMesh& mesh);
 /// than one fan, the faces of all but the largest fan are removed (repeated until no such vertex
 /// is left). Returns the number of faces removed.
 size_t dropPinchedFans(std::vector<Eigen::Vector3i>& faces, size_t num_vertices);
+/// The same, looking only at the given vertices (and then at the corners of dropped faces): for a
+/// face list where only those vertices can have more than one fan.
+size_t dropPinchedFans(std::vector<Eigen::Vector3i>& faces, size_t num_vertices, std::vector<int> candidates);
 
 /// Mean and maximum distance [m] from sample points to a reference surface.
 struct SurfaceDistance {
