@@ -18,7 +18,7 @@
 namespace scanstop {
 namespace mesher {
 
-/// Node parameters (private namespace); see README.md for the table.
+/// Node parameters (private namespace); see the README section "bpa_mesher_node" for the table.
 struct MesherNodeConfig {
   std::string map_dir;                 ///< map directory meshed when input_path is empty
   std::string frame_id = "map";        ///< frame of the map, the meshes and the markers
