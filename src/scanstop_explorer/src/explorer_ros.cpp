@@ -27,7 +27,11 @@ bool isDirectory(const std::string& p) {
 }  // namespace
 
 void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n) {
-  using ros_params::optional;
+  std::vector<std::string> known;
+  const auto optional = [&](const ros::NodeHandle& nh, const std::string& name, auto& value) {
+    known.push_back(name);
+    ros_params::optional(nh, name, value);
+  };
   optional(pnh, "frame_id", n.frame_id);
   optional(pnh, "map_dir", n.map_dir);
   optional(pnh, "run_dir", n.run_dir);
@@ -55,6 +59,9 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "progress_m", c.progress_m);
   optional(pnh, "max_failed_attempts", c.max_failed_attempts);
   optional(pnh, "blacklist_radius_m", c.blacklist_radius_m);
+  for (const std::string& name : ros_params::unknownParameters(pnh, known))
+    ROS_WARN("explorer_node: ignoring unknown parameter '%s' (a typo? the names carry their unit, e.g. k_r_m)",
+             name.c_str());
   try {
     c.validate();
   } catch (const ConfigError& e) {

@@ -82,17 +82,7 @@ DriverConfig PioneerDriverNode::readParameters(const ros::NodeHandle& pnh) {
 }
 
 std::vector<std::string> PioneerDriverNode::unknownParameters(const ros::NodeHandle& pnh) {
-  std::vector<std::string> names, unknown;
-  ros::param::getParamNames(names);
-  const std::string prefix = pnh.getNamespace() + "/";
-  for (const std::string& name : names) {
-    if (name.compare(0, prefix.size(), prefix) != 0) continue;
-    const std::string key = name.substr(prefix.size());
-    bool known = false;
-    for (const char* k : kKnownParameters) known = known || key == k;
-    if (!known) unknown.push_back(name);
-  }
-  return unknown;
+  return ros_params::unknownParameters(pnh, std::vector<std::string>(std::begin(kKnownParameters), std::end(kKnownParameters)));
 }
 
 PioneerDriverNode::PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : updater_(nh, pnh) {

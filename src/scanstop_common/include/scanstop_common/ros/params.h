@@ -3,8 +3,10 @@
 /// error naming the parameter (with its full namespace), never a silent default.
 
 #include <ros/node_handle.h>
+#include <ros/param.h>
 
 #include <string>
+#include <vector>
 
 #include "scanstop_common/error.h"
 
@@ -28,6 +30,23 @@ void optional(const ros::NodeHandle& nh, const std::string& name, T& value) {
   if (!nh.hasParam(name)) return;
   if (!nh.getParam(name, value))
     throw ConfigError("parameter '" + nh.resolveName(name) + "' has the wrong type");
+}
+
+/// Parameters set in nh's namespace (directly or below it) whose first name component is not in
+/// `known`: typos such as `k_r` for `k_r_m` that would otherwise be ignored silently. Full names.
+inline std::vector<std::string> unknownParameters(const ros::NodeHandle& nh, const std::vector<std::string>& known) {
+  std::vector<std::string> names, unknown;
+  ros::param::getParamNames(names);
+  const std::string prefix = nh.getNamespace() == "/" ? "/" : nh.getNamespace() + "/";
+  for (const std::string& name : names) {
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string key = name.substr(prefix.size());
+    bool is_known = false;
+    for (const std::string& k : known)
+      is_known = is_known || key == k || key.compare(0, k.size() + 1, k + "/") == 0;
+    if (!is_known) unknown.push_back(name);
+  }
+  return unknown;
 }
 
 }  // namespace ros_params
