@@ -59,14 +59,25 @@ ScanOutput Simulator::scan(int planes) {
   ++scan_counter_;
 
   const Eigen::Isometry3f T_world_base = true_world_.toIsometry3f();
+  // The beam angles within a plane are the same in every plane: their sines and cosines once per
+  // scan (ScannerConfig::direction's formula, so the directions are bit for bit the same).
+  std::vector<double> beam_sin(beams), beam_cos(beams);
+  for (int b = 0; b < beams; ++b) {
+    const double theta = (sc.first_step + b - sc.front_step) * 2.0 * M_PI / sc.steps_per_turn;
+    beam_sin[b] = std::sin(theta);
+    beam_cos[b] = std::cos(theta);
+  }
 #pragma omp parallel for schedule(dynamic, 4)
   for (int p = 0; p < planes; ++p) {
     if (lost[p]) continue;
     std::mt19937_64 rng(scan_seed ^ (0x9E3779B97F4A7C15ull * static_cast<uint64_t>(p + 1)));
     const Eigen::Vector3f o_base = sc.origin(p, planes);
     const Eigen::Vector3f o_world = T_world_base * o_base;
+    const double phi = M_PI * p / planes;
+    const double cos_phi = std::cos(phi), sin_phi = std::sin(phi);
     for (int b = 0; b < beams; ++b) {
-      const Eigen::Vector3f d_base = sc.direction(p, planes, b);
+      const Eigen::Vector3f d_base(static_cast<float>(beam_sin[b] * cos_phi), static_cast<float>(beam_sin[b] * sin_phi),
+                                   static_cast<float>(beam_cos[b]));
       const Eigen::Vector3f d_world = T_world_base.linear() * d_base;
       const double hit = world_.castRay(o_world, d_world, static_cast<float>(sc.max_range_m * 1.05));
       const float r = sampleRange(config_.errors.sensor, sc, static_cast<float>(hit), rng);
