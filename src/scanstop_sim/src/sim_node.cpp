@@ -2,10 +2,12 @@
 
 #include <nav_msgs/Odometry.h>
 #include <rosgraph_msgs/Clock.h>
+#include <tf2_msgs/TFMessage.h>
 #include <scanstop_msgs/Progress.h>
 #include <visualization_msgs/Marker.h>
 
 #include <cmath>
+#include <vector>
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
@@ -93,6 +95,7 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "odom_frame", odom_frame_);
   ros_params::optional(pnh, "base_frame", base_frame_);
   ros_params::optional(pnh, "laser_frame", laser_frame_);
+  ros_params::optional(pnh, "odom_as_map", odom_as_map_);
   nh.param("/use_sim_time", publish_clock_, false);
 
   ROS_INFO("sim_node: loading world %s", world_path.c_str());
@@ -106,7 +109,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
            sim_->world().mesh().faces.size(), sim_->world().floorTriangles(), start.toString().c_str(), profile.c_str(), seed);
 
   if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
-  odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10);
+  odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10, true);
+  tf_connect_pub_ = nh.advertise<tf2_msgs::TFMessage>("/tf", 100, [this](const ros::SingleSubscriberPublisher& pub) { onTfSubscriber(pub); });
   truth_pub_ = nh.advertise<nav_msgs::Odometry>("ground_truth", 10, true);
   scan_pub_ = nh.advertise<sensor_msgs::PointCloud2>("scanner/last_scan", 1, true);
   progress_pub_ = nh.advertise<scanstop_msgs::Progress>("scanner/progress", 10);
@@ -143,15 +147,34 @@ void SimNode::publishState() {
   }
   odom_pub_.publish(odometryMsg(sim_->odometry(), odom_frame_, base_frame_, stamp));
   truth_pub_.publish(odometryMsg(sim_->trueInMap(), map_frame_, base_frame_ + "_truth", stamp));
-  tf_.sendTransform(ros_conv::toTransformMsg(sim_->odometry(), odom_frame_, base_frame_, stamp));
+  const geometry_msgs::TransformStamped odom_tf = ros_conv::toTransformMsg(sim_->odometry(), odom_frame_, base_frame_, stamp);
+  {
+    std::lock_guard<std::mutex> lock(tf_mutex_);
+    last_odom_tf_ = odom_tf;
+  }
+  tf_.sendTransform(odom_tf);
+}
+
+void SimNode::onTfSubscriber(const ros::SingleSubscriberPublisher& pub) {
+  tf2_msgs::TFMessage msg;
+  {
+    std::lock_guard<std::mutex> lock(tf_mutex_);
+    if (last_odom_tf_.header.frame_id.empty()) return;
+    msg.transforms.push_back(last_odom_tf_);
+  }
+  pub.publish(msg);
 }
 
 void SimNode::publishStaticTransforms() {
   const ros::Time stamp = now();
   Eigen::Isometry3d T_base_laser = Eigen::Isometry3d::Identity();
   T_base_laser.translation() = Eigen::Vector3d(sim_->config().scanner.x_offset_m, 0.0, sim_->config().scanner.height_m);
-  static_tf_.sendTransform({ros_conv::toTransformMsg(sim_->start(), world_frame_, map_frame_, stamp),
-                            ros_conv::toTransformMsg(T_base_laser, base_frame_, laser_frame_, stamp)});
+  std::vector<geometry_msgs::TransformStamped> transforms{
+      ros_conv::toTransformMsg(sim_->start(), world_frame_, map_frame_, stamp),
+      ros_conv::toTransformMsg(T_base_laser, base_frame_, laser_frame_, stamp)};
+  // Without a SLAM node, odometry is the only estimate: map -> odom is the identity.
+  if (odom_as_map_) transforms.push_back(ros_conv::toTransformMsg(Pose2D(), map_frame_, odom_frame_, stamp));
+  static_tf_.sendTransform(transforms);
 }
 
 void SimNode::publishWorldMarker() {

@@ -9,6 +9,7 @@
 #include <scanstop_msgs/ResetSim.h>
 #include <scanstop_msgs/Rotate.h>
 #include <scanstop_msgs/TakeScan.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
@@ -37,17 +38,25 @@ class SimNode {
   void publishState();
   void publishStaticTransforms();
   void publishWorldMarker();
+  /// A new /tf subscriber (rviz started later, a late node) gets the current odom -> base_link
+  /// once: with the modelled clock it only changes at steps, and re-sending it to everybody with
+  /// the same stamp would make every tf listener warn about repeated data.
+  void onTfSubscriber(const ros::SingleSubscriberPublisher& pub);
   ros::Time now() const;
 
   std::unique_ptr<Simulator> sim_;
   std::mutex mutex_;
   bool publish_clock_ = false;
+  bool odom_as_map_ = false;  ///< publish map -> odom as identity (no SLAM running)
   double clock_start_s_ = 1.0;
   std::string world_frame_ = "world", map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link",
               laser_frame_ = "laser";
   ros::ServiceServer take_scan_srv_, rotate_srv_, forward_srv_, reset_srv_;
   ros::Publisher clock_pub_, odom_pub_, truth_pub_, scan_pub_, progress_pub_, marker_pub_;
   tf2_ros::TransformBroadcaster tf_;
+  ros::Publisher tf_connect_pub_;  ///< the same /tf publication, for onTfSubscriber
+  std::mutex tf_mutex_;
+  geometry_msgs::TransformStamped last_odom_tf_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   ros::WallTimer clock_timer_;
 };
