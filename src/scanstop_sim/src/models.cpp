@@ -108,6 +108,12 @@ Pose2D sampleRotation(const MotionConfig& m, double angle_rad, std::mt19937_64& 
 
 float sampleRange(const SensorNoiseConfig& noise, const ScannerConfig& scanner, float true_range_m,
                   std::mt19937_64& rng) {
+  std::normal_distribution<double> standard_normal(0.0, 1.0);
+  return sampleRange(noise, scanner, true_range_m, rng, standard_normal);
+}
+
+float sampleRange(const SensorNoiseConfig& noise, const ScannerConfig& scanner, float true_range_m,
+                  std::mt19937_64& rng, std::normal_distribution<double>& standard_normal) {
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   const double total = noise.p_hit + noise.p_random + noise.p_max;
   std::uniform_real_distribution<double> u01(0.0, 1.0);
@@ -120,8 +126,7 @@ float sampleRange(const SensorNoiseConfig& noise, const ScannerConfig& scanner, 
     return kNaN;
   const double sigma = true_range_m <= 1.0 ? noise.sigma_near_m : noise.sigma_far_rel * true_range_m;
   if (sigma <= 0.0) return true_range_m;
-  std::normal_distribution<double> n(0.0, sigma);
-  const double r = true_range_m + n(rng);
+  const double r = true_range_m + sigma * standard_normal(rng);
   return (r < scanner.min_range_m || r > scanner.max_range_m) ? kNaN : static_cast<float>(r);
 }
 

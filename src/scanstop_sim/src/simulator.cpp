@@ -71,6 +71,7 @@ ScanOutput Simulator::scan(int planes) {
   for (int p = 0; p < planes; ++p) {
     if (lost[p]) continue;
     std::mt19937_64 rng(scan_seed ^ (0x9E3779B97F4A7C15ull * static_cast<uint64_t>(p + 1)));
+    std::normal_distribution<double> standard_normal(0.0, 1.0);
     const Eigen::Vector3f o_base = sc.origin(p, planes);
     const Eigen::Vector3f o_world = T_world_base * o_base;
     const double phi = M_PI * p / planes;
@@ -80,7 +81,7 @@ ScanOutput Simulator::scan(int planes) {
                                    static_cast<float>(beam_cos[b]));
       const Eigen::Vector3f d_world = T_world_base.linear() * d_base;
       const double hit = world_.castRay(o_world, d_world, static_cast<float>(sc.max_range_m * 1.05));
-      const float r = sampleRange(config_.errors.sensor, sc, static_cast<float>(hit), rng);
+      const float r = sampleRange(config_.errors.sensor, sc, static_cast<float>(hit), rng, standard_normal);
       if (!std::isfinite(r)) continue;
       const size_t i = static_cast<size_t>(p) * beams + b;
       cloud.ranges[i] = r;

@@ -299,6 +299,45 @@ TEST(Worlds, RealHouseLoadsAndScans) {
   EXPECT_GT(floor_points, 1000u);
 }
 
+TEST(Worlds, RealHouseFullScanAtStartPose) {
+  // A full 400-plane scan at the house's documented start (-3, 1, 0), perfect sensor: the rays
+  // that hit something within 5.6 m are valid, in range, and lie on the house's surfaces.
+  SimConfig config;
+  config.errors = makeProfile("perfect");
+  config.outlier_filter = false;
+  const Pose2D start = defaultStartPose("turtlebot3_house");
+  EXPECT_NEAR(start.x, -3.0, 1e-9);
+  EXPECT_NEAR(start.y, 1.0, 1e-9);
+  EXPECT_NEAR(start.yaw, 0.0, 1e-9);
+  Simulator sim(World::load(sharedDataPath("worlds/turtlebot3_house.stl")), config, start);
+  const ScanOutput s = sim.scan(400);
+  ASSERT_EQ(s.cloud.height, 400u);
+  ASSERT_EQ(s.cloud.width, 682u);
+  EXPECT_EQ(s.raw_points, 272800u);
+  EXPECT_EQ(s.planes_dropped, 0u);
+  // No ceiling: about half of the sphere sees nothing; walls, furniture and floor the rest.
+  EXPECT_GT(s.valid_points, 272800u / 3);
+  EXPECT_LT(s.valid_points, 272800u * 3 / 4);
+  const Eigen::Isometry3f T = start.toIsometry3f();
+  size_t checked = 0, near_surface = 0;
+  for (size_t i = 0; i < s.cloud.points.size(); i += 97) {
+    const Eigen::Vector3f& p = s.cloud.points[i];
+    if (!p.allFinite()) continue;
+    const float r = s.cloud.ranges[i];
+    EXPECT_GE(r, 0.02f);
+    EXPECT_LE(r, 5.6f);
+    // Casting again towards the point from the scanner hits it at the same distance.
+    const Eigen::Vector3f o = T * config.scanner.origin(static_cast<int>(i / 682), 400);
+    const Eigen::Vector3f q = T * p;
+    const float d = (q - o).norm();
+    const double hit = sim.world().castRay(o, (q - o) / d, 10.0f);
+    ++checked;
+    near_surface += std::abs(hit - d) < 1e-3 ? 1 : 0;
+  }
+  EXPECT_GT(checked, 400u);
+  EXPECT_EQ(near_surface, checked);
+}
+
 }  // namespace
 }  // namespace sim
 }  // namespace scanstop

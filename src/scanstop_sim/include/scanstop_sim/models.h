@@ -96,6 +96,10 @@ Pose2D sampleRotation(const MotionConfig& m, double angle_rad, std::mt19937_64& 
 /// A simulated range reading: NaN for an invalid one (no return, max-range case, out of range).
 float sampleRange(const SensorNoiseConfig& noise, const ScannerConfig& scanner, float true_range_m,
                   std::mt19937_64& rng);
+/// The same with a caller-owned standard normal distribution (mean 0, sigma 1): a scan keeps one
+/// per plane, so the second variate the polar method makes is used instead of thrown away.
+float sampleRange(const SensorNoiseConfig& noise, const ScannerConfig& scanner, float true_range_m,
+                  std::mt19937_64& rng, std::normal_distribution<double>& standard_normal);
 
 }  // namespace sim
 }  // namespace scanstop
