@@ -178,6 +178,23 @@ int benchWorlds(const std::vector<std::string>& worlds, int planes, int repeat) 
                   threads, bare.median_ms, bare.min_ms, sp.median_ms, sp.min_ms, st.median_ms, st.min_ms,
                   ser.median_ms, ser.min_ms, sp.median_ms / bare.median_ms, st.median_ms / bare.median_ms);
     }
+    // The parts of the service after the scan, each alone (all threads).
+    {
+      const scanstop::sim::ScanOutput s = thesis.scan(planes);
+      scanstop_msgs::TakeScan::Response res;
+      const Stat to_msg = timeIt(repeat, [&] { res.cloud = scanstop::ros_conv::toMsg(s.cloud, "base_link", ros::Time(1, 0)); });
+      ros::SerializedMessage m;
+      const Stat ser = timeIt(repeat, [&] { m = ros::serialization::serializeServiceResponse(true, res); });
+      const Stat deser = timeIt(repeat, [&] {
+        scanstop_msgs::TakeScan::Response back;
+        ros::serialization::IStream in(m.buf.get() + 5, static_cast<uint32_t>(m.num_bytes - 5));
+        ros::serialization::deserialize(in, back);
+      });
+      char parts[256];
+      std::snprintf(parts, sizeof(parts), "%s: toMsg %.1f ms, serialize %.1f ms, deserialize %.1f ms (medians)",
+                    name.c_str(), to_msg.median_ms, ser.median_ms, deser.median_ms);
+      notes.push_back(parts);
+    }
     char buf[256];
     std::snprintf(buf, sizeof(buf), "%s: %zu triangles, start %s; bare hits %zu, valid points perfect %u, thesis %u; "
                   "response %.1f MB",
@@ -225,6 +242,7 @@ int benchService(int planes, int repeat, int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  scanstop::sim::keepLargeBuffersMapped();  // as sim_node does
   std::vector<std::string> worlds;
   int planes = 400, repeat = 7;
   bool service = false;

@@ -3,6 +3,7 @@
 #include "scanstop_sim/sim_node.h"
 
 int main(int argc, char** argv) {
+  scanstop::sim::keepLargeBuffersMapped();
   ros::init(argc, argv, "sim_node");
   ros::NodeHandle nh, pnh("~");
   try {

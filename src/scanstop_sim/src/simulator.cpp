@@ -1,5 +1,7 @@
 #include "scanstop_sim/simulator.h"
 
+#include <malloc.h>
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -8,6 +10,11 @@
 
 namespace scanstop {
 namespace sim {
+
+void keepLargeBuffersMapped() {
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);   // allocations up to 64 MB come from the heap ...
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);  // ... and freed memory stays there for the next scan
+}
 
 void SimConfig::validate() const {
   scanner.validate();

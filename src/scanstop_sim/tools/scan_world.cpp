@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
   if (pose_text.empty()) return usage("--pose is required");
   if (planes != 50 && planes != 100 && planes != 200 && planes != 400) return usage("--planes must be 50, 100, 200 or 400");
   try {
+    scanstop::sim::keepLargeBuffersMapped();
     scanstop::sim::SimConfig config;
     config.errors = scanstop::sim::makeProfile(profile);
     config.seed = static_cast<uint64_t>(seed);
