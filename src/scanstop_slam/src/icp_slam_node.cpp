@@ -1,12 +1,16 @@
 // icp_slam_node wires IcpSlam to ROS: it serves slam/register_scan, writes the map directory after
 // every scan, and publishes the corrected pose, tf map -> odom, the path of scan poses, each
 // registered scan once in the map frame, and a voxel-downsampled map cloud.
+// Offline mode (subscribe_scans, launch/replay.launch): scans arrive on scanner/last_scan and the
+// odometry pose at scan time comes from the odom topic (a rosbag played into the node).
+#include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <scanstop_msgs/RegisterScan.h>
 #include <scanstop_msgs/RegisteredScan.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <deque>
 #include <memory>
 #include <mutex>
 
@@ -61,6 +65,13 @@ class IcpSlamNode {
     scan_pub_ = nh.advertise<scanstop_msgs::RegisteredScan>("slam/registered_scan", 50);
     map_pub_ = nh.advertise<sensor_msgs::PointCloud2>("slam/map_cloud", 1, true);
     server_ = nh.advertiseService("slam/register_scan", &IcpSlamNode::onRegister, this);
+    bool subscribe_scans = false;
+    ros_params::optional(pnh, "subscribe_scans", subscribe_scans);
+    if (subscribe_scans) {
+      // Every scan is kept (a registration takes about a second; scans come tens of seconds apart).
+      odom_sub_ = nh.subscribe("odom", 200, &IcpSlamNode::onOdom, this);
+      scan_sub_ = nh.subscribe("scanner/last_scan", 100, &IcpSlamNode::onScan, this);
+    }
     timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { publishTf(false); });
     path_.header.frame_id = map_frame_;
     if (const MapDirectory* dir = slam_->mapDirectory()) {
@@ -91,6 +102,32 @@ class IcpSlamNode {
     map_pub_.publish(ros_conv::toMsg(cloud, map_frame_, stamp));
     path_.header.stamp = stamp;
     path_pub_.publish(path_);
+  }
+
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+    odom_.push_back(msg);
+    if (odom_.size() > 2000) odom_.pop_front();
+  }
+
+  /// Offline mode: the scan is registered at the latest odometry pose not after its stamp (the robot
+  /// stands still while it scans); without one the scan is dropped with a warning.
+  void onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+    const nav_msgs::Odometry::ConstPtr* best = nullptr;
+    for (const auto& o : odom_)
+      if (o->header.stamp <= msg->header.stamp && (!best || o->header.stamp >= (*best)->header.stamp)) best = &o;
+    if (!best) {
+      ROS_WARN("icp_slam_node: dropped the scan stamped %.3f: no odometry on %s at or before it",
+               msg->header.stamp.toSec(), odom_sub_.getTopic().c_str());
+      return;
+    }
+    scanstop_msgs::RegisterScan::Request req;
+    scanstop_msgs::RegisterScan::Response res;
+    req.cloud = *msg;
+    req.odom_pose.header = (*best)->header;
+    req.odom_pose.pose = (*best)->pose.pose;
+    onRegister(req, res);
+    if (!res.success) ROS_WARN("icp_slam_node: scan from %s not registered: %s", scan_sub_.getTopic().c_str(),
+                               res.message.c_str());
   }
 
   bool onRegister(scanstop_msgs::RegisterScan::Request& req, scanstop_msgs::RegisterScan::Response& res) {
@@ -166,6 +203,8 @@ class IcpSlamNode {
   std::string map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link";
   ros::Publisher pose_pub_, path_pub_, scan_pub_, map_pub_;
   ros::ServiceServer server_;
+  ros::Subscriber odom_sub_, scan_sub_;
+  std::deque<nav_msgs::Odometry::ConstPtr> odom_;
   ros::WallTimer timer_;
   tf2_ros::TransformBroadcaster tf_;
   nav_msgs::Path path_;
