@@ -7,7 +7,8 @@
 //     does), a bare Embree loop (rtcIntersect1 per ray, no error model) over exactly the same rays,
 //     each with one thread and with all OpenMP threads, and the in-process part of the service:
 //     scan -> PointCloud2 (ros_conv::toMsg) -> TakeScan response serialized and deserialized with
-//     ros::serialization. Prints medians (and minima) over R repetitions after one warm-up.
+//     ros::serialization. Prints medians (and minima) over R interleaved repetitions after one
+//     warm-up (the variants take turns, so a shared machine's load hits them alike).
 //
 //   sim_bench --service [--planes N] [--repeat R]
 //     Calls scanner/take_scan of a running sim_node R times and prints the wall-clock round trip
@@ -56,6 +57,26 @@ Stat timeIt(int repeat, const std::function<void()>& f) {
   }
   std::sort(ms.begin(), ms.end());
   return {ms[ms.size() / 2], ms.front()};
+}
+
+/// Like timeIt for several functions, interleaved (f0, f1, ..., f0, f1, ...) so that the load of
+/// a shared machine affects all of them alike.
+std::vector<Stat> timeInterleaved(int repeat, const std::vector<std::function<void()>>& fs) {
+  for (const auto& f : fs) f();
+  std::vector<std::vector<double>> ms(fs.size());
+  for (int i = 0; i < repeat; ++i) {
+    for (size_t k = 0; k < fs.size(); ++k) {
+      const auto t0 = Clock::now();
+      fs[k]();
+      ms[k].push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    }
+  }
+  std::vector<Stat> out;
+  for (auto& v : ms) {
+    std::sort(v.begin(), v.end());
+    out.push_back({v[v.size() / 2], v.front()});
+  }
+  return out;
 }
 
 int usage(const std::string& why) {
@@ -126,7 +147,7 @@ size_t bareLoop(RTCScene scene, const Rays& rays, std::vector<float>& ranges) {
 
 int benchWorlds(const std::vector<std::string>& worlds, int planes, int repeat) {
   const int max_threads = omp_get_max_threads();
-  std::printf("sim_bench: %d planes x 682 beams = %d rays per scan, median (min) of %d runs after a warm-up, "
+  std::printf("sim_bench: %d planes x 682 beams = %d rays per scan, median (min) of %d interleaved runs after a warm-up, "
               "OpenMP threads: 1 and %d\n\n",
               planes, planes * 682, repeat, max_threads);
   std::printf("%-22s %3s %14s %14s %14s %14s %7s %7s\n", "world", "thr", "bare Embree", "scan perfect",
@@ -152,11 +173,8 @@ int benchWorlds(const std::vector<std::string>& worlds, int planes, int repeat) 
     for (int threads : {1, max_threads}) {
       if (threads == 1 && max_threads == 1) continue;
       omp_set_num_threads(threads);
-      const Stat bare = timeIt(repeat, [&] { bare_hits = bareLoop(perfect.world().scene(), rays, work); });
-      const Stat sp = timeIt(repeat, [&] { perfect_valid = perfect.scan(planes).valid_points; });
-      const Stat st = timeIt(repeat, [&] { thesis_valid = thesis.scan(planes).valid_points; });
-      // The node's part of the service: scan, PointCloud2, the TakeScan response on the wire and back.
-      const Stat ser = timeIt(repeat, [&] {
+      auto serviceSide = [&] {
+        // The node's part of the service: scan, PointCloud2, the TakeScan response on the wire and back.
         scanstop_msgs::TakeScan::Response res;
         const scanstop::sim::ScanOutput s = thesis.scan(planes);
         res.cloud = scanstop::ros_conv::toMsg(s.cloud, "base_link", ros::Time(1, 0));
@@ -165,15 +183,20 @@ int benchWorlds(const std::vector<std::string>& worlds, int planes, int repeat) 
         res.counts.valid_points = s.valid_points;
         const ros::SerializedMessage m = ros::serialization::serializeServiceResponse(true, res);
         bytes = m.num_bytes;
-        scanstop_msgs::TakeScan::Response back;
         // serializeServiceResponse writes [ok: uint8][length: uint32][message]; the client reads the message.
+        scanstop_msgs::TakeScan::Response back;
         ros::serialization::IStream in(m.buf.get() + 5, static_cast<uint32_t>(m.num_bytes - 5));
         ros::serialization::deserialize(in, back);
         if (back.cloud.data.size() != res.cloud.data.size()) {
           std::cerr << "sim_bench: deserialized cloud differs in size\n";
           std::exit(1);
         }
-      });
+      };
+      const std::vector<Stat> t = timeInterleaved(
+          repeat, {[&] { bare_hits = bareLoop(perfect.world().scene(), rays, work); },
+                   [&] { perfect_valid = perfect.scan(planes).valid_points; },
+                   [&] { thesis_valid = thesis.scan(planes).valid_points; }, serviceSide});
+      const Stat &bare = t[0], &sp = t[1], &st = t[2], &ser = t[3];
       std::printf("%-22s %3d %7.2f (%4.1f) %7.2f (%4.1f) %7.2f (%4.1f) %7.2f (%4.1f) %7.2f %7.2f\n", name.c_str(),
                   threads, bare.median_ms, bare.min_ms, sp.median_ms, sp.min_ms, st.median_ms, st.min_ms,
                   ser.median_ms, ser.min_ms, sp.median_ms / bare.median_ms, st.median_ms / bare.median_ms);

@@ -117,7 +117,8 @@ float sampleRange(const SensorNoiseConfig& noise, const ScannerConfig& scanner, 
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   const double total = noise.p_hit + noise.p_random + noise.p_max;
   std::uniform_real_distribution<double> u01(0.0, 1.0);
-  const double pick = u01(rng) * total;
+  // Only hits possible (perfect sensor): no draw needed.
+  const double pick = (noise.p_random + noise.p_max > 0.0) ? u01(rng) * total : 0.0;
   if (pick >= noise.p_hit + noise.p_random) return kNaN;  // max-range reading: the URG reports no return
   if (pick >= noise.p_hit) {
     return static_cast<float>(scanner.min_range_m + u01(rng) * (scanner.max_range_m - scanner.min_range_m));
