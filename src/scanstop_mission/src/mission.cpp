@@ -30,6 +30,7 @@ void MissionConfig::validate() const {
   requireOneOf("planes", planes, {50, 100, 200, 400});
   requireInRange("max_scans", max_scans, 0, 100000);
   requireInRange("d_max", d_max_m, 0.05, 10.0, "m");
+  requireInRange("min_scan_travel", min_scan_travel_m, 0.0, 100.0, "m");
   requireInRange("waypoint_tolerance", waypoint_tolerance_m, 0.0, 1.0, "m");
   requireInRange("heading_tolerance", heading_tolerance_rad, 0.0, 0.5, "rad");
   requireInRange("max_step_retries", max_step_retries, 0, 100);
@@ -346,7 +347,11 @@ State Mission::run() {
     // Drive the path, scanning where the plan says.
     const size_t scans_before = snapshot().scans.size();
     bool replan = false;
+    double travel = 0.0;  // planned path length since the last scan [m]
+    Eigen::Vector2d from(now.estimate().x, now.estimate().y);
     for (size_t i = 0; i < plan.waypoints.size() && !replan; ++i) {
+      travel += (plan.waypoints[i] - from).norm();
+      from = plan.waypoints[i];
       bool collision = false;
       if (!driveTo(plan.waypoints[i], collision)) {
         if (!checkControl()) return finish(State::Aborted, "aborted by the user");
@@ -363,8 +368,10 @@ State Mission::run() {
         break;
       }
       const bool last = i + 1 == plan.waypoints.size();
-      const bool scan_here = (i < plan.scan_at.size() && plan.scan_at[i]) || last;
+      const bool landmark = i < plan.scan_at.size() && plan.scan_at[i];
+      const bool scan_here = last || (landmark && travel >= config_.min_scan_travel_m);
       if (scan_here) {
+        travel = 0.0;
         if (!scanAndRegister()) {
           if (!checkControl()) return finish(State::Aborted, "aborted by the user");
           replan = true;

@@ -39,6 +39,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "d_max", config_.d_max_m);
   ros_params::optional(pnh, "waypoint_tolerance", config_.waypoint_tolerance_m);
   ros_params::optional(pnh, "heading_tolerance", config_.heading_tolerance_rad);
+  ros_params::optional(pnh, "min_scan_travel", config_.min_scan_travel_m);
   ros_params::optional(pnh, "max_step_retries", config_.max_step_retries);
   ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
   ros_params::optional(pnh, "build_mesh", config_.build_mesh);

@@ -241,6 +241,24 @@ TEST(Mission, ScansAtIntermediateLandmarks) {
   EXPECT_EQ(m.snapshot().scans.size(), 3u);  // start, landmark, target
 }
 
+TEST(Mission, MinScanTravelSkipsLandmarkScansAfterShortLegsOnly) {
+  // Targets 3 m and then 9 m away with a landmark half way: legs of 1.5 m and 3 m (from (3, 0) to
+  // (6, 0) and on). With min_scan_travel 2 m the first landmark (1.5 m driven) is skipped, the
+  // second (3 m driven) is scanned; targets always are.
+  TempDir dir;
+  FakeSystem sys;
+  sys.insert_intermediate = true;
+  sys.targets = {{3.0, 0.0}, {9.0, 0.0}};
+  MissionConfig c = config(dir.path());
+  c.min_scan_travel_m = 2.0;
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  ASSERT_EQ(s.scans.size(), 4u);  // start, target 1, landmark (6, 0), target 2
+  EXPECT_NEAR(s.scans[2].true_pose->x, 6.0, 0.1);
+  EXPECT_NEAR(s.scans[3].true_pose->x, 9.0, 0.1);
+}
+
 TEST(Mission, CollisionMarksTargetUnreachableAndReplans) {
   TempDir dir;
   FakeSystem sys;

@@ -24,6 +24,10 @@ struct MissionConfig {
   double d_max_m = 2.0;                  ///< longest straight motion [m] (thesis d_max)
   double waypoint_tolerance_m = 0.05;    ///< a waypoint closer than this is reached [m]
   double heading_tolerance_rad = 0.005;  ///< rotations smaller than this are skipped [rad]
+  /// Scans at intermediate landmarks (thesis 5.5) only once the path driven since the last scan is
+  /// at least this long [m]; 0 = at every landmark the explorer marks (the thesis). The target is
+  /// always scanned.
+  double min_scan_travel_m = 0.0;
   int max_step_retries = 2;              ///< retries of a failed scan, registration or plan
   int max_consecutive_failed_cycles = 5; ///< cycles in a row that make no progress before giving up
   int max_cycles = 1000;                 ///< hard bound on plan-drive cycles
