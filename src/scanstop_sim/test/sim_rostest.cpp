@@ -107,6 +107,35 @@ TEST(SimNode, ScanRotateForwardScanAndCollide) {
   EXPECT_FALSE(call("scanner/take_scan", scan).response.success);
 }
 
+TEST(SimNode, LateTfSubscriberGetsTheCurrentPose) {
+  // Runs after the steps above. A tf listener started now (rviz, a late node) receives the current
+  // odom -> base_link on connecting; with odom_as_map (map -> odom identity) and the perfect
+  // profile, map -> base_link is the ground truth.
+  const Pose2D truth = groundTruth();
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(10.0);
+  while (!buffer.canTransform("world", "base_link", ros::Time(0)) && ros::WallTime::now() < deadline)
+    ros::WallDuration(0.1).sleep();
+  ASSERT_TRUE(buffer.canTransform("world", "base_link", ros::Time(0))) << "no world -> base_link for a late listener";
+  const Pose2D in_map = scanstop::ros_conv::fromPoseMsg([&] {
+    const auto t = buffer.lookupTransform("map", "base_link", ros::Time(0)).transform;
+    geometry_msgs::Pose p;
+    p.position.x = t.translation.x;
+    p.position.y = t.translation.y;
+    p.position.z = t.translation.z;
+    p.orientation = t.rotation;
+    return p;
+  }());
+  EXPECT_NEAR(in_map.x, truth.x, 1e-6);
+  EXPECT_NEAR(in_map.y, truth.y, 1e-6);
+  EXPECT_NEAR(std::remainder(in_map.yaw - truth.yaw, 2 * M_PI), 0.0, 1e-6);
+  // world -> map is the start pose of room_10x8 (2, 5, 0).
+  const auto world_map = buffer.lookupTransform("world", "map", ros::Time(0)).transform;
+  EXPECT_NEAR(world_map.translation.x, 2.0, 1e-9);
+  EXPECT_NEAR(world_map.translation.y, 5.0, 1e-9);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
