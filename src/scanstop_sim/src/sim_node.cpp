@@ -150,7 +150,10 @@ void SimNode::publishState() {
   const geometry_msgs::TransformStamped odom_tf = ros_conv::toTransformMsg(sim_->odometry(), odom_frame_, base_frame_, stamp);
   {
     std::lock_guard<std::mutex> lock(tf_mutex_);
-    last_odom_tf_ = odom_tf;
+    while (!recent_odom_tf_.empty() && recent_odom_tf_.back().header.stamp >= odom_tf.header.stamp)
+      recent_odom_tf_.pop_back();  // same stamp (no time passed) or a reset clock: the newest wins
+    recent_odom_tf_.push_back(odom_tf);
+    while (recent_odom_tf_.size() > kRecentTf) recent_odom_tf_.pop_front();
   }
   tf_.sendTransform(odom_tf);
 }
@@ -159,8 +162,8 @@ void SimNode::onTfSubscriber(const ros::SingleSubscriberPublisher& pub) {
   tf2_msgs::TFMessage msg;
   {
     std::lock_guard<std::mutex> lock(tf_mutex_);
-    if (last_odom_tf_.header.frame_id.empty()) return;
-    msg.transforms.push_back(last_odom_tf_);
+    if (recent_odom_tf_.empty()) return;
+    msg.transforms.assign(recent_odom_tf_.begin(), recent_odom_tf_.end());
   }
   pub.publish(msg);
 }

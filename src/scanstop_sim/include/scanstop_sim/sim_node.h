@@ -13,6 +13,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -38,9 +39,10 @@ class SimNode {
   void publishState();
   void publishStaticTransforms();
   void publishWorldMarker();
-  /// A new /tf subscriber (rviz started later, a late node) gets the current odom -> base_link
-  /// once: with the modelled clock it only changes at steps, and re-sending it to everybody with
-  /// the same stamp would make every tf listener warn about repeated data.
+  /// A new /tf subscriber (rviz started later, a late node) gets the recent odom -> base_link
+  /// transforms (the last kRecentTf steps) once: with the modelled clock they only change at steps,
+  /// re-sending them to everybody with the same stamps would make every tf listener warn about
+  /// repeated data, and a latched last scan needs the transform at its own stamp.
   void onTfSubscriber(const ros::SingleSubscriberPublisher& pub);
   ros::Time now() const;
 
@@ -56,7 +58,8 @@ class SimNode {
   tf2_ros::TransformBroadcaster tf_;
   ros::Publisher tf_connect_pub_;  ///< the same /tf publication, for onTfSubscriber
   std::mutex tf_mutex_;
-  geometry_msgs::TransformStamped last_odom_tf_;
+  static constexpr size_t kRecentTf = 32;
+  std::deque<geometry_msgs::TransformStamped> recent_odom_tf_;  ///< oldest first, distinct stamps
   tf2_ros::StaticTransformBroadcaster static_tf_;
   ros::WallTimer clock_timer_;
 };
