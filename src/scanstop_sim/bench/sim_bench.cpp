@@ -1,8 +1,8 @@
 // sim_bench: speed of the simulator's 3D scan against the practical limit of Embree on this machine.
 //
-//   sim_bench [--world FILE.stl]... [--planes N] [--repeat R]
+//   sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R]
 //     For each world (default: the turtlebot3 house from the shared data and worlds/room_10x8.stl),
-//     at the world's documented start pose: times Simulator::scan (perfect profile without the
+//     at the world's documented start pose (or --pose, world frame [m, m, rad]): times Simulator::scan (perfect profile without the
 //     outlier filter = ray casting only; thesis profile with the filter = everything the node
 //     does), a bare Embree loop (rtcIntersect1 per ray, no error model) over exactly the same rays,
 //     each with one thread and with all OpenMP threads, and the in-process part of the service:
@@ -81,7 +81,7 @@ std::vector<Stat> timeInterleaved(int repeat, const std::vector<std::function<vo
 
 int usage(const std::string& why) {
   std::cerr << "sim_bench: " << why << "\n"
-            << "usage: sim_bench [--world FILE.stl]... [--planes N] [--repeat R]\n"
+            << "usage: sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R]\n"
                "       sim_bench --service [--planes N] [--repeat R]   (against a running sim_node)\n";
   return 2;
 }
@@ -145,7 +145,7 @@ size_t bareLoop(RTCScene scene, const Rays& rays, std::vector<float>& ranges) {
   return hits;
 }
 
-int benchWorlds(const std::vector<std::string>& worlds, int planes, int repeat) {
+int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_text, int planes, int repeat) {
   const int max_threads = omp_get_max_threads();
   std::printf("sim_bench: %d planes x 682 beams = %d rays per scan, median (min) of %d interleaved runs after a warm-up, "
               "OpenMP threads: 1 and %d\n\n",
@@ -156,7 +156,7 @@ int benchWorlds(const std::vector<std::string>& worlds, int planes, int repeat) 
               "+serialize", "bare", "bare");
   std::vector<std::string> notes;
   for (const std::string& path : worlds) {
-    const scanstop::Pose2D start = startPoseFor(path);
+    const scanstop::Pose2D start = pose_text.empty() ? startPoseFor(path) : scanstop::parsePose2D(pose_text);
     SimConfig perfect_cfg;
     perfect_cfg.errors = scanstop::sim::makeProfile("perfect");
     perfect_cfg.outlier_filter = false;
@@ -267,6 +267,7 @@ int benchService(int planes, int repeat, int argc, char** argv) {
 int main(int argc, char** argv) {
   scanstop::sim::keepLargeBuffersMapped();  // as sim_node does
   std::vector<std::string> worlds;
+  std::string pose_text;
   int planes = 400, repeat = 7;
   bool service = false;
   std::vector<char*> ros_args{argv[0]};
@@ -283,6 +284,7 @@ int main(int argc, char** argv) {
     if (i + 1 >= argc) return usage("missing value after " + arg);
     const std::string value = argv[++i];
     if (arg == "--world") worlds.push_back(value);
+    else if (arg == "--pose") pose_text = value;
     else if (arg == "--planes") planes = std::atoi(value.c_str());
     else if (arg == "--repeat") repeat = std::atoi(value.c_str());
     else return usage("unknown option " + arg);
@@ -295,7 +297,7 @@ int main(int argc, char** argv) {
       return benchService(planes, repeat, n, ros_args.data());
     }
     if (worlds.empty()) worlds = {SCANSTOP_SHARED_DATA_DIR "/worlds/turtlebot3_house.stl", SCANSTOP_WORLDS_DIR "/room_10x8.stl"};
-    return benchWorlds(worlds, planes, repeat);
+    return benchWorlds(worlds, pose_text, planes, repeat);
   } catch (const std::exception& e) {
     std::cerr << "sim_bench: " << e.what() << "\n";
     return 1;
