@@ -17,8 +17,8 @@ PKG = "scanstop_mission"
 
 class RobotExploreOnEmulators(unittest.TestCase):
     def test_mission_runs_on_the_drivers(self):
-        run_dir = sys.argv[1]
-        rospy.init_node("robot_explore_rostest", anonymous=True)
+        rospy.init_node("robot_explore_rostest")
+        run_dir = rospy.get_param("~run_dir")
         last = {}
 
         def on_status(msg):
@@ -54,4 +54,4 @@ class RobotExploreOnEmulators(unittest.TestCase):
 
 if __name__ == "__main__":
     import rostest
-    rostest.rosrun(PKG, "robot_explore_on_emulators", RobotExploreOnEmulators, sys.argv[:1])
+    rostest.rosrun(PKG, "robot_explore_on_emulators", RobotExploreOnEmulators, sys.argv)
