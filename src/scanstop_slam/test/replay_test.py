@@ -103,7 +103,7 @@ class ReplayTest(unittest.TestCase):
                     p = odom[j]
                 bag.write("/odom", odom_msg(p, t), rospy.Time.from_sec(t))
             for i, scan in enumerate(scans):
-                bag.write("/scanner/last_scan", scan, rospy.Time.from_sec(SCAN_TIMES[i] + 0.01))
+                bag.write("scanner/last_scan", scan, rospy.Time.from_sec(SCAN_TIMES[i] + 0.01))
 
         # Online: the same scans and odometry poses through the service.
         rospy.wait_for_service("online/slam/register_scan", timeout=30.0)
