@@ -1,5 +1,7 @@
 #include "scanstop_pioneer/pty_emulator.h"
 
+#include "scanstop_common/serial.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -60,7 +62,7 @@ void PtyEmulator::openPty() {
   // Keep one slave descriptor open: the master then never reads EIO while no client is attached,
   // and the slave's termios (raw: no echo, no CRLF mapping) stay as set here.
   const int slave = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
-  if (slave < 0 || !makeRaw(slave)) {
+  if (slave < 0 || !configureRawSerial(slave, 0)) {
     if (slave >= 0) ::close(slave);
     ::close(master);
     throw sysError(std::string("raw mode on ") + name);

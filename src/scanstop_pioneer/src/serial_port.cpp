@@ -1,5 +1,7 @@
 #include "scanstop_pioneer/serial_port.h"
 
+#include "scanstop_common/serial.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -13,52 +15,20 @@ namespace scanstop {
 namespace pioneer {
 namespace {
 
-speed_t baudConstant(int baud) {
-  switch (baud) {
-    case 9600: return B9600;
-    case 19200: return B19200;
-    case 38400: return B38400;
-    case 57600: return B57600;
-    case 115200: return B115200;
-    default: return 0;
-  }
-}
-
 std::string sysError(const std::string& what, const std::string& path) {
   return path + ": " + what + ": " + std::strerror(errno);
 }
 
 }  // namespace
 
-bool makeRaw(int fd) {
-  termios tio;
-  if (tcgetattr(fd, &tio) != 0) return false;
-  cfmakeraw(&tio);
-  tio.c_cflag |= CLOCAL | CREAD;
-  tio.c_cflag &= ~(CSTOPB | CRTSCTS);
-  tio.c_iflag &= ~(IXON | IXOFF | IXANY);
-  tio.c_cc[VMIN] = 0;
-  tio.c_cc[VTIME] = 0;
-  return tcsetattr(fd, TCSANOW, &tio) == 0;
-}
-
 void SerialPort::open(const std::string& path, int baud) {
   close();
-  const speed_t speed = baudConstant(baud);
-  if (speed == 0)
-    throw LinkError(path + ": baud rate " + std::to_string(baud) + " is not one of 9600, 19200, 38400, 57600, 115200");
+  if (!isSupportedBaud(baud))
+    throw LinkError(path + ": baud rate " + std::to_string(baud) + " is not one of " + supportedBauds());
   const int fd = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) throw LinkError(sysError("cannot open", path));
-  termios tio;
-  if (tcgetattr(fd, &tio) != 0) {
-    const std::string msg = sysError("not a terminal (tcgetattr)", path);
-    ::close(fd);
-    throw LinkError(msg);
-  }
-  cfsetispeed(&tio, speed);
-  cfsetospeed(&tio, speed);
-  if (tcsetattr(fd, TCSANOW, &tio) != 0 || !makeRaw(fd)) {
-    const std::string msg = sysError("cannot set raw mode", path);
+  if (!configureRawSerial(fd, baud)) {
+    const std::string msg = sysError(errno == ENOTTY ? "not a terminal" : "cannot set raw mode", path);
     ::close(fd);
     throw LinkError(msg);
   }

@@ -1,5 +1,7 @@
 #include "scanstop_urg/serial.h"
 
+#include "scanstop_common/serial.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -13,22 +15,6 @@ namespace scanstop {
 namespace urg {
 namespace {
 
-speed_t baudConstant(int baud) {
-  switch (baud) {
-    case 9600: return B9600;
-    case 19200: return B19200;
-    case 38400: return B38400;
-    case 57600: return B57600;
-    case 115200: return B115200;
-    case 230400: return B230400;
-    case 500000: return B500000;
-    case 1000000: return B1000000;
-    default: break;
-  }
-  throw std::invalid_argument("unsupported baud rate " + std::to_string(baud) +
-                              " (9600, 19200, 38400, 57600, 115200, 230400, 500000, 1000000)");
-}
-
 double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -36,29 +22,17 @@ double now_s() {
 }  // namespace
 
 SerialPort::SerialPort(const std::string& path, int baud) : path_(path) {
-  const speed_t speed = baudConstant(baud);
+  if (!isSupportedBaud(baud))
+    throw std::invalid_argument("unsupported baud rate " + std::to_string(baud) + " (" + supportedBauds() + ")");
   fd_ = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) throw ScipError(ScipError::Kind::kDisconnected, "cannot open " + path + ": " + std::strerror(errno));
-  termios tio{};
-  if (tcgetattr(fd_, &tio) != 0) {
+  if (!configureRawSerial(fd_, baud)) {
+    const bool not_tty = errno == ENOTTY;
     const std::string err = std::strerror(errno);
     ::close(fd_);
     fd_ = -1;
-    throw ScipError(ScipError::Kind::kDisconnected, path + " is not a serial port: " + err);
-  }
-  cfmakeraw(&tio);  // 8 bits, no parity, no ICANON/ECHO/ICRNL/OPOST
-  tio.c_cflag &= ~(CSTOPB | CRTSCTS | PARENB);
-  tio.c_cflag |= CLOCAL | CREAD | CS8;
-  tio.c_iflag &= ~(IXON | IXOFF | IXANY);
-  tio.c_cc[VMIN] = 0;
-  tio.c_cc[VTIME] = 0;
-  cfsetispeed(&tio, speed);
-  cfsetospeed(&tio, speed);
-  if (tcsetattr(fd_, TCSANOW, &tio) != 0) {
-    const std::string err = std::strerror(errno);
-    ::close(fd_);
-    fd_ = -1;
-    throw ScipError(ScipError::Kind::kDisconnected, "cannot configure " + path + ": " + err);
+    throw ScipError(ScipError::Kind::kDisconnected,
+                    not_tty ? path + " is not a serial port: " + err : "cannot configure " + path + ": " + err);
   }
   tcflush(fd_, TCIOFLUSH);
 }

@@ -6,7 +6,6 @@
 #include <poll.h>
 #include <signal.h>
 #include <sys/stat.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -19,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "scanstop_common/serial.h"
 #include "scanstop_urg/emulator.h"
 #include "scanstop_urg/scip.h"
 
@@ -94,11 +94,7 @@ struct Pty {
     // Keep a slave descriptor open ourselves, so the master does not hang up between clients;
     // put the slave into raw mode (a fresh pty echoes and maps LF to CRLF).
     slave_keep = ::open(slave_path.c_str(), O_RDWR | O_NOCTTY);
-    termios tio{};
-    if (slave_keep >= 0 && tcgetattr(slave_keep, &tio) == 0) {
-      cfmakeraw(&tio);
-      tcsetattr(slave_keep, TCSANOW, &tio);
-    }
+    if (slave_keep >= 0) scanstop::configureRawSerial(slave_keep, 0);
     if (!link.empty()) {
       const std::string tmp = link + ".tmp";
       ::unlink(tmp.c_str());

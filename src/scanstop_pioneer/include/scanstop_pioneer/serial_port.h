@@ -52,8 +52,5 @@ class SerialPort : public ByteStream {
   std::string path_;
 };
 
-/// Puts an open terminal file descriptor into raw mode; returns false on failure (errno set).
-bool makeRaw(int fd);
-
 }  // namespace pioneer
 }  // namespace scanstop
