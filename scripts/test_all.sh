@@ -61,6 +61,12 @@ if [[ -n "$launch_files" ]]; then
   /usr/bin/python3 scripts/check_launch.py "$results/_launch" $launch_files || true
 fi
 
+# The simulated setup binds to loopback: master, roslaunch and TCPROS listen on 127.0.0.1 only.
+echo "test: loopback binding of the simulated setup (scripts/check_loopback.sh)"
+if bash scripts/check_loopback.sh > logs/check_loopback.log 2>&1; then lo_ok=1; else lo_ok=0; fi
+cat logs/check_loopback.log
+junit loopback_binding $lo_ok logs/check_loopback.log
+
 echo "test: catkin_make run_tests (log in logs/run_tests.log)"
 catkin_make -DCATKIN_ENABLE_TESTING=ON -j1 run_tests > logs/run_tests.log 2>&1
 run_rc=$?
