@@ -2,8 +2,10 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <unordered_set>
 
 #include "scanstop_common/config.h"
@@ -19,6 +21,53 @@ VoxelMap::VoxelMap(double voxel_m, int max_points_per_voxel, double min_spacing_
   requirePositive("voxel", voxel_m, "m");
   requireInRange("map_spacing", min_spacing_m, 0.0, voxel_m, "m");
   if (max_points_per_voxel < 1) throw ConfigError("max_points_per_voxel must be >= 1");
+}
+
+namespace {
+/// splitmix64's finalizer: spreads neighbouring voxel keys over the whole table.
+inline uint64_t mixKey(uint64_t k) {
+  k ^= k >> 30;
+  k *= 0xbf58476d1ce4e5b9ULL;
+  k ^= k >> 27;
+  k *= 0x94d049bb133111ebULL;
+  return k ^ (k >> 31);
+}
+}  // namespace
+
+int32_t VoxelMap::findCell(Key k) const {
+  if (slot_keys_.empty()) return -1;
+  for (size_t i = mixKey(static_cast<uint64_t>(k)) & slot_mask_;; i = (i + 1) & slot_mask_) {
+    const int32_t c = slot_cells_[i];
+    if (c < 0) return -1;
+    if (slot_keys_[i] == k) return c;
+  }
+}
+
+void VoxelMap::growTable() {
+  const size_t capacity = slot_keys_.empty() ? 1024 : slot_keys_.size() * 2;
+  slot_keys_.assign(capacity, 0);
+  slot_cells_.assign(capacity, -1);
+  slot_mask_ = capacity - 1;
+  for (size_t c = 0; c < cells_.size(); ++c) {
+    size_t i = mixKey(static_cast<uint64_t>(cells_[c].key)) & slot_mask_;
+    while (slot_cells_[i] >= 0) i = (i + 1) & slot_mask_;
+    slot_keys_[i] = cells_[c].key;
+    slot_cells_[i] = static_cast<int32_t>(c);
+  }
+}
+
+int32_t VoxelMap::findOrAddCell(Key k) {
+  if (2 * (cells_.size() + 1) > slot_keys_.size()) growTable();
+  size_t i = mixKey(static_cast<uint64_t>(k)) & slot_mask_;
+  for (; slot_cells_[i] >= 0; i = (i + 1) & slot_mask_)
+    if (slot_keys_[i] == k) return slot_cells_[i];
+  if (cells_.size() >= static_cast<size_t>(std::numeric_limits<int32_t>::max()))
+    throw std::length_error("VoxelMap: more than 2^31 voxels");
+  slot_keys_[i] = k;
+  slot_cells_[i] = static_cast<int32_t>(cells_.size());
+  cells_.emplace_back();
+  cells_.back().key = k;
+  return slot_cells_[i];
 }
 
 VoxelMap::Key VoxelMap::key(int x, int y, int z) const {
@@ -45,14 +94,14 @@ void VoxelMap::classify(Cell& cell) {
 }
 
 void VoxelMap::add(const std::vector<Eigen::Vector3f>& points) {
-  std::unordered_set<Key> touched;
+  std::vector<int32_t> touched;
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
     const int x = static_cast<int>(std::floor(p.x() / voxel_));
     const int y = static_cast<int>(std::floor(p.y() / voxel_));
     const int z = static_cast<int>(std::floor(p.z() / voxel_));
-    const Key k = key(x, y, z);
-    auto& cell = cells_[k].points;
+    const int32_t c = findOrAddCell(key(x, y, z));
+    auto& cell = cells_[c].points;
     if (static_cast<int>(cell.size()) >= max_per_voxel_) continue;
     if (min_spacing2_ > 0.0f) {
       bool crowded = false;
@@ -64,10 +113,12 @@ void VoxelMap::add(const std::vector<Eigen::Vector3f>& points) {
       if (crowded) continue;
     }
     cell.push_back(p);
-    touched.insert(k);
+    touched.push_back(c);
     ++size_;
   }
-  for (const Key k : touched) classify(cells_[k]);
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  for (const int32_t c : touched) classify(cells_[c]);
 }
 
 bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,
@@ -91,15 +142,16 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
       box2 += g * g;
     }
     if (box2 >= best) return;
-    const auto it = cells_.find(key(x + dx, y + dy, z + dz));
-    if (it == cells_.end()) return;
-    for (const auto& p : it->second.points) {
+    const int32_t c = findCell(key(x + dx, y + dy, z + dz));
+    if (c < 0) return;
+    const Cell& cell = cells_[c];
+    for (const auto& p : cell.points) {
       const float d2 = (p - q).squaredNorm();
       if (d2 < best) {
         best = d2;
         out = p;
         found = true;
-        if (horizontal) *horizontal = it->second.horizontal;
+        if (horizontal) *horizontal = cell.horizontal;
       }
     }
   };
@@ -117,7 +169,7 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
 std::vector<Eigen::Vector3f> VoxelMap::points() const {
   std::vector<Eigen::Vector3f> out;
   out.reserve(size_);
-  for (const auto& [k, cell] : cells_) out.insert(out.end(), cell.points.begin(), cell.points.end());
+  for (const auto& cell : cells_) out.insert(out.end(), cell.points.begin(), cell.points.end());
   return out;
 }
 

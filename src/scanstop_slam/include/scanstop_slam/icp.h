@@ -10,7 +10,6 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace scanstop {
@@ -46,11 +45,20 @@ class VoxelMap {
   float min_spacing2_;
   size_t size_ = 0;
   struct Cell {
+    Key key = 0;
     std::vector<Eigen::Vector3f> points;
     bool horizontal = false;  ///< the points lie on a horizontal plane (PCA normal within 20 deg of z)
   };
   static void classify(Cell& cell);
-  std::unordered_map<Key, Cell> cells_;
+  /// Open-addressing hash (linear probing, power-of-two table, at most half full) from voxel key
+  /// to an index into cells_: one flat array probe per lookup instead of a node-based map's chain.
+  int32_t findCell(Key k) const;
+  int32_t findOrAddCell(Key k);
+  void growTable();
+  std::vector<Cell> cells_;
+  std::vector<Key> slot_keys_;
+  std::vector<int32_t> slot_cells_;  ///< -1: empty slot
+  size_t slot_mask_ = 0;
 };
 
 /// ICP parameters (thesis optimum as defaults).
