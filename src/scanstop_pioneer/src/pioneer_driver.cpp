@@ -41,6 +41,10 @@ void DriverConfig::validate() const {
   requireInRange("cmd_vel_timeout", cmd_vel_timeout_s, 0.05, 10.0, "s");
   requireInRange("max_linear_speed", max_linear_speed_mps, 0.0, robot.max_velocity_mps, "m/s");
   requireInRange("max_angular_speed", max_angular_speed_radps, 0.0, robot.max_rot_velocity_radps, "rad/s");
+  // max_linear_speed / max_angular_speed bound every speed the driver commands (sendVelocity clamps
+  // to them as well): the motion primitives' cruise speeds must lie within.
+  requireInRange("motion/linear_speed", motion.linear_speed_mps, 0.01, max_linear_speed_mps, "m/s");
+  requireInRange("motion/angular_speed", motion.angular_speed_radps, 0.02, max_angular_speed_radps, "rad/s");
 }
 
 PioneerDriver::PioneerDriver(const DriverConfig& config) : config_(config), odometry_(config.robot) {
@@ -315,6 +319,9 @@ void PioneerDriver::serve() {
 }
 
 void PioneerDriver::sendVelocity(double v_mps, double w_radps, double now) {
+  // The last guard, whatever computed the setpoint: never faster than the configured bounds.
+  v_mps = std::isfinite(v_mps) ? std::clamp(v_mps, -config_.max_linear_speed_mps, config_.max_linear_speed_mps) : 0.0;
+  w_radps = std::isfinite(w_radps) ? std::clamp(w_radps, -config_.max_angular_speed_radps, config_.max_angular_speed_radps) : 0.0;
   const int vel = static_cast<int>(std::lround(v_mps * 1000.0));
   const int rvel = static_cast<int>(std::lround(w_radps * kRadToDeg));
   if (vel == sent_vel_ && rvel == sent_rvel_ && (vel != 0 || rvel != 0) == sent_nonzero_) return;

@@ -2,6 +2,8 @@
 // on a real pseudo-terminal: handshake, recovery of a session still open, motions, cmd_vel timeout.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -155,6 +157,27 @@ TEST(Client, HandshakeAndRecoveryOverAPty) {
   emu.stop();
 }
 
+TEST(Client, RobotStopsByItsWatchdogWhenTheDriverFallsSilent) {
+  // A driver that crashes mid-motion sends nothing more (no STOP): the robot's own 2 s watchdog
+  // (P2OS; modelled by the emulator) stops the drives, over the real pty link.
+  PtyEmulator emu(EmulatorConfig(), "");
+  emu.start();
+  SerialPort port;
+  port.open(emu.devicePath(), 9600);
+  P2osClient client(port, ClientConfig());
+  client.connect();
+  client.send(commandPacket(cmd::kVel, 300));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  EXPECT_GT(emu.with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.25);
+  EXPECT_FALSE(emu.with([](RobotEmulator& e) { return e.watchdogTripped(); }));
+  // Silence: 2 s watchdog, then 1 s to brake from 0.3 m/s at 0.3 m/s^2.
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  EXPECT_TRUE(emu.with([](RobotEmulator& e) { return e.watchdogTripped(); }));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  EXPECT_EQ(emu.with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.0);
+  emu.stop();
+}
+
 TEST(Client, NoRobotFailsWithAClearMessage) {
   PtyEmulator emu(EmulatorConfig(), "");
   emu.start();
@@ -236,6 +259,88 @@ TEST_F(DriverOnEmulator, CmdVelTimeoutStopsTheRobot) {
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // no new command: timeout 0.5 s
   EXPECT_NEAR(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.0, 1e-9);
   EXPECT_EQ(driver_->status().cmd_vel_timeouts, 1u);
+}
+
+// ---- Bad requests and speed bounds (issue 9).
+
+TEST_F(DriverOnEmulator, BadRequestsAreRefusedAndMoveNothing) {
+  const scanstop::Pose2D before = truth();
+  const scanstop::Pose2D odom_before = driver_->status().odom;
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Case {
+    bool rotate;
+    double target;
+    std::string expected;
+  };
+  for (const Case& c : {Case{true, 50.0, "angle_rad = 50.000 must be finite and within [-6.283, 6.283]"},
+                        Case{true, -7.0, "angle_rad = -7.000"}, Case{true, std::nan(""), "angle_rad = nan"},
+                        Case{true, -inf, "angle_rad = -inf"},
+                        Case{false, 100.0, "distance_m = 100.000 must be finite and within [-5.000, 5.000]"},
+                        Case{false, -5.5, "distance_m = -5.500"}, Case{false, std::nan(""), "distance_m = nan"},
+                        Case{false, inf, "distance_m = inf"}}) {
+    const MotionResult r = c.rotate ? driver_->rotate(c.target) : driver_->forward(c.target);
+    EXPECT_FALSE(r.success);
+    EXPECT_NE(r.message.find(c.expected), std::string::npos) << r.message;
+    EXPECT_LT(r.duration_s, 1e-9);  // refused before anything was sent
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(truth().toString(), before.toString());
+  EXPECT_EQ(driver_->status().odom.toString(), odom_before.toString());
+  EXPECT_EQ(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.0);
+  std::string reason;
+  EXPECT_FALSE(driver_->commandVelocity(std::nan(""), 0.0, &reason));
+  EXPECT_EQ(reason, "velocity is not finite");
+}
+
+TEST_F(DriverOnEmulator, CmdVelIsClampedToTheSpeedBounds) {
+  // A client asks for 3 m/s and 10 rad/s: the robot gets max_linear_speed 0.5 m/s (then max_angular_speed).
+  // (Commands repeated every 0.1 s as a teleoperation client does; the robot accelerates at 0.3 m/s^2.)
+  for (int i = 0; i < 25; ++i) {
+    ASSERT_TRUE(driver_->commandVelocity(3.0, 0.0));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_NEAR(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.5, 1e-6);
+  for (int i = 0; i < 25; ++i) {
+    ASSERT_TRUE(driver_->commandVelocity(0.0, -10.0));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  // RVEL is sent in whole deg/s: 57 deg/s.
+  EXPECT_NEAR(emu_->with([](RobotEmulator& e) { return e.angularVelocity(); }), -1.0, 0.01);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // command timeout: stopped
+  EXPECT_EQ(emu_->with([](RobotEmulator& e) { return e.angularVelocity(); }), 0.0);
+  EXPECT_EQ(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.0);
+}
+
+TEST(DriverConfigChecks, MotionSpeedsMustStayWithinTheSpeedBounds) {
+  DriverConfig c;
+  c.port = "/dev/null";
+  EXPECT_NO_THROW(c.validate());
+  c.motion.linear_speed_mps = 0.8;  // above max_linear_speed 0.5
+  try {
+    c.validate();
+    ADD_FAILURE() << "accepted motion/linear_speed above max_linear_speed";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("'motion/linear_speed' = 0.8 m/s is out of range [0.01, 0.5 m/s]"),
+              std::string::npos) << e.what();
+  }
+  c = DriverConfig();
+  c.port = "/dev/null";
+  c.max_angular_speed_radps = 0.2;  // below motion/angular_speed 0.35
+  EXPECT_THROW(c.validate(), std::exception);
+  c = DriverConfig();
+  c.port = "/dev/null";
+  c.cmd_vel_timeout_s = -1.0;
+  try {
+    c.validate();
+    ADD_FAILURE() << "accepted a negative cmd_vel_timeout";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("'cmd_vel_timeout' = -1 s is out of range [0.05, 10 s]"), std::string::npos)
+        << e.what();
+  }
+  c = DriverConfig();
+  c.port = "/dev/null";
+  c.motion.max_forward_m = 1000.0;
+  EXPECT_THROW(c.validate(), std::exception);
 }
 
 }  // namespace

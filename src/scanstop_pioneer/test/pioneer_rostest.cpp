@@ -14,6 +14,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <future>
 #include <mutex>
 
@@ -223,6 +224,30 @@ TEST(PioneerDriver, C_RotateAndForward) {
   const auto far = forward(6.0);
   EXPECT_FALSE(far.response.success);
   EXPECT_NE(far.response.message.find("distance_m"), std::string::npos) << far.response.message;
+}
+
+TEST(PioneerDriver, C2_BadRequestsAreRefusedAndMoveNothing) {
+  ros::WallDuration(0.5).sleep();
+  const auto before = g_odom->latest();
+  for (double a : {50.0, -7.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    const auto r = rotate(a);
+    EXPECT_FALSE(r.response.success) << a;
+    EXPECT_NE(r.response.message.find("angle_rad = "), std::string::npos) << r.response.message;
+    EXPECT_NE(r.response.message.find("must be finite and within [-6.283, 6.283]"), std::string::npos) << r.response.message;
+  }
+  for (double d : {100.0, -5.5, std::nan(""), -std::numeric_limits<double>::infinity()}) {
+    const auto f = forward(d);
+    EXPECT_FALSE(f.response.success) << d;
+    EXPECT_NE(f.response.message.find("distance_m = "), std::string::npos) << f.response.message;
+    EXPECT_NE(f.response.message.find("must be finite and within [-5.000, 5.000]"), std::string::npos) << f.response.message;
+  }
+  ros::WallDuration(0.5).sleep();
+  const auto after = g_odom->latest();
+  EXPECT_EQ(after.pose.pose.position.x, before.pose.pose.position.x);
+  EXPECT_EQ(after.pose.pose.position.y, before.pose.pose.position.y);
+  EXPECT_EQ(after.pose.pose.orientation.z, before.pose.pose.orientation.z);
+  EXPECT_EQ(after.twist.twist.linear.x, 0.0);
+  EXPECT_EQ(after.twist.twist.angular.z, 0.0);
 }
 
 TEST(PioneerDriver, D_CmdVelTimeoutStopsTheRobot) {

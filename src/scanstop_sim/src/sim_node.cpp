@@ -7,6 +7,7 @@
 #include <visualization_msgs/Marker.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "scanstop_common/config.h"
@@ -47,7 +48,11 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   std::string profile = "thesis";
   ros_params::optional(pnh, "error_profile", profile);
   SimConfig config;
-  config.errors = makeProfile(profile);
+  try {
+    config.errors = makeProfile(profile);
+  } catch (const ConfigError& e) {
+    throw ConfigError("parameter '" + pnh.resolveName("error_profile") + "' = '" + profile + "': " + e.what());
+  }
   int seed = 1;
   ros_params::optional(pnh, "seed", seed);
   if (seed < 0) throw ConfigError("parameter '" + pnh.resolveName("seed") + "' = " + std::to_string(seed) + " must be >= 0");
@@ -83,12 +88,26 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "motion/angular_speed", mo.angular_speed_radps);
   ros_params::optional(pnh, "robot_radius", config.robot_radius_m);
   ros_params::optional(pnh, "max_forward", config.max_forward_m);
+  ros_params::optional(pnh, "max_rotate", config.max_rotate_rad);
   ros_params::optional(pnh, "outlier_filter", config.outlier_filter);
-  config.validate();
+  try {
+    config.validate(pp);
+  } catch (const ConfigError& e) {
+    throw ConfigError(std::string(e.what()) + " (private namespace " + pnh.getNamespace() + ")");
+  }
+  ros_params::optional(pnh, "motion_time_scale", motion_time_scale_);
+  if (!(motion_time_scale_ >= 0.0 && motion_time_scale_ <= 10.0))
+    throw ConfigError("parameter '" + pnh.resolveName("motion_time_scale") + "' = " + std::to_string(motion_time_scale_) +
+                      " is out of range [0, 10]");
 
   std::string start_text;
   ros_params::optional(pnh, "start_pose", start_text);
-  const Pose2D start = start_text.empty() ? defaultStartPose(baseName(world_path)) : parsePose2D(start_text);
+  Pose2D start;
+  try {
+    start = start_text.empty() ? defaultStartPose(baseName(world_path)) : parsePose2D(start_text);
+  } catch (const std::exception& e) {
+    throw ConfigError("parameter '" + pnh.resolveName("start_pose") + "' = '" + start_text + "': " + e.what());
+  }
 
   ros_params::optional(pnh, "world_frame", world_frame_);
   ros_params::optional(pnh, "map_frame", map_frame_);
@@ -96,6 +115,19 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "base_frame", base_frame_);
   ros_params::optional(pnh, "laser_frame", laser_frame_);
   ros_params::optional(pnh, "odom_as_map", odom_as_map_);
+  {
+    const std::vector<std::pair<std::string, std::string>> frames{{"world_frame", world_frame_}, {"map_frame", map_frame_},
+        {"odom_frame", odom_frame_}, {"base_frame", base_frame_}, {"laser_frame", laser_frame_}};
+    for (size_t i = 0; i < frames.size(); ++i) {
+      if (frames[i].second.empty() || frames[i].second.find_first_of(" /") == 0)
+        throw ConfigError("parameter '" + pnh.resolveName(frames[i].first) + "' = '" + frames[i].second +
+                          "' must be a non-empty frame id without a leading '/' or space");
+      for (size_t j = 0; j < i; ++j)
+        if (frames[i].second == frames[j].second)
+          throw ConfigError("parameters '" + pnh.resolveName(frames[j].first) + "' and '" + pnh.resolveName(frames[i].first) +
+                            "' are both '" + frames[i].second + "': the frames must differ");
+    }
+  }
   nh.param("/use_sim_time", publish_clock_, false);
 
   ROS_INFO("sim_node: loading world %s", world_path.c_str());
@@ -206,10 +238,17 @@ void SimNode::publishWorldMarker() {
 }
 
 bool SimNode::onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res) {
+  res.success = false;
+  res.message = checkScanPlanes(req.planes);
+  if (!res.message.empty()) return true;
+  // A scan needs the robot standing still (thesis 3.2): refused, not queued, while the base moves.
+  if (moving_) {
+    res.message = "the base is moving (a rotate/forward motion is running): a scan needs the robot standing still";
+    return true;
+  }
   std::lock_guard<std::mutex> lock(mutex_);
-  if (req.planes != 50 && req.planes != 100 && req.planes != 200 && req.planes != 400) {
-    res.success = false;
-    res.message = "planes = " + std::to_string(req.planes) + " is not one of 50, 100, 200, 400";
+  if (moving_) {
+    res.message = "the base is moving (a rotate/forward motion is running): a scan needs the robot standing still";
     return true;
   }
   scanstop_msgs::Progress progress;
@@ -240,43 +279,82 @@ bool SimNode::onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::T
 }
 
 bool SimNode::onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (!std::isfinite(req.angle_rad) || std::abs(req.angle_rad) > 2.0 * M_PI) {
-    res.success = false;
-    res.message = "angle_rad = " + std::to_string(req.angle_rad) + " must be finite and within [-2 pi, 2 pi]";
-    return true;
-  }
-  const MotionOutput out = sim_->rotate(req.angle_rad);
+  res.success = false;
+  res.message = checkRotation(req.angle_rad, sim_->config().max_rotate_rad);
+  if (!res.message.empty()) return true;
+  const MotionOutput out = runMotion([&] { return sim_->rotate(req.angle_rad); }, 0.0, req.angle_rad, &res.message);
+  if (!res.message.empty()) return true;
   res.achieved_angle_rad = out.achieved;
   res.collision = out.collision;
   res.duration_s = out.duration_s;
   res.success = !out.collision;
-  publishState();
+  std::lock_guard<std::mutex> lock(mutex_);
   res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, now());
   return true;
 }
 
 bool SimNode::onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const double limit = sim_->config().max_forward_m;
-  if (!std::isfinite(req.distance_m) || std::abs(req.distance_m) > limit) {
-    res.success = false;
-    res.message = "distance_m = " + std::to_string(req.distance_m) + " must be finite and within [-" +
-                  std::to_string(limit) + ", " + std::to_string(limit) + "] m (parameter max_forward)";
-    return true;
-  }
-  const MotionOutput out = sim_->forward(req.distance_m);
+  res.success = false;
+  res.message = checkForward(req.distance_m, sim_->config().max_forward_m);
+  if (!res.message.empty()) return true;
+  const MotionOutput out = runMotion([&] { return sim_->forward(req.distance_m); }, req.distance_m, 0.0, &res.message);
+  if (!res.message.empty()) return true;
   res.achieved_distance_m = out.achieved;
   res.collision = out.collision;
   res.duration_s = out.duration_s;
   res.success = !out.collision;
   if (out.collision) res.message = "collision after " + std::to_string(out.achieved) + " m: the robot touched an obstacle";
-  publishState();
+  std::lock_guard<std::mutex> lock(mutex_);
   res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, now());
   return true;
 }
 
+MotionOutput SimNode::runMotion(const std::function<MotionOutput()>& motion, double distance_m, double angle_rad,
+                                std::string* refused) {
+  if (moving_.exchange(true)) {
+    *refused = "another rotate/forward motion is running";
+    return MotionOutput();
+  }
+  MotionOutput out;
+  Pose2D before;
+  try {
+    std::lock_guard<std::mutex> lock(mutex_);
+    before = sim_->odometry();
+    out = motion();
+  } catch (const std::exception& e) {  // checked before; the simulator refuses the same cases
+    moving_ = false;
+    *refused = e.what();
+    return out;
+  }
+  if (motion_time_scale_ > 0.0 && out.duration_s > 0.0) {
+    // The motion takes its modelled time on the wall clock: odom shows the robot moving (the twist
+    // of the commanded motion at the start pose) until it arrives.
+    const double speed = distance_m != 0.0 ? sim_->config().errors.motion.linear_speed_mps
+                                           : sim_->config().errors.motion.angular_speed_radps;
+    nav_msgs::Odometry moving = odometryMsg(before, odom_frame_, base_frame_, ros::Time::now());
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      moving.header.stamp = now();
+    }
+    moving.twist.twist.linear.x = distance_m > 0 ? speed : distance_m < 0 ? -speed : 0.0;
+    moving.twist.twist.angular.z = angle_rad > 0 ? speed : angle_rad < 0 ? -speed : 0.0;
+    odom_pub_.publish(moving);
+    ros::WallDuration(out.duration_s * motion_time_scale_).sleep();
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    publishState();
+  }
+  moving_ = false;
+  return out;
+}
+
 bool SimNode::onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::ResetSim::Response& res) {
+  if (moving_) {
+    res.success = false;
+    res.message = "the base is moving (a rotate/forward motion is running): reset after it";
+    return true;
+  }
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     sim_->reset(Pose2D(req.pose.x, req.pose.y, req.pose.theta), req.seed);

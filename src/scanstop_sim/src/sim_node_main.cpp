@@ -8,7 +8,10 @@ int main(int argc, char** argv) {
   ros::NodeHandle nh, pnh("~");
   try {
     scanstop::sim::SimNode node(nh, pnh);
-    ros::spin();
+    // Several threads: a scan request during a (wall-clock timed) motion is answered at once.
+    ros::AsyncSpinner spinner(3);
+    spinner.start();
+    ros::waitForShutdown();
   } catch (const std::exception& e) {
     ROS_FATAL("sim_node: %s", e.what());
     return 1;

@@ -3,6 +3,7 @@
 #include <malloc.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -16,13 +17,57 @@ void keepLargeBuffersMapped() {
   mallopt(M_TRIM_THRESHOLD, 512 << 20);  // ... and freed memory stays there for the next scan
 }
 
-void SimConfig::validate() const {
-  scanner.validate();
-  errors.sensor.validate();
-  errors.motion.validate();
+void SimConfig::validate(const std::string& profile_prefix) const {
+  scanner.validate("scanner/");
+  errors.sensor.validate(profile_prefix + "sensor/");
+  errors.motion.validate(profile_prefix + "motion/", "motion/");
   requireInRange("robot_radius", robot_radius_m, 0.05, 2.0, "m");
   requireInRange("collision_step", collision_step_m, 0.0005, 0.1, "m");
   requireInRange("max_forward", max_forward_m, 0.1, 100.0, "m");
+  requireInRange("max_rotate", max_rotate_rad, 0.1, 4.0 * M_PI, "rad");
+}
+
+namespace {
+
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+std::string checkScanPlanes(long planes) {
+  if (planes == 50 || planes == 100 || planes == 200 || planes == 400) return "";
+  return "planes = " + std::to_string(planes) + " is not one of 50, 100, 200, 400";
+}
+
+std::string checkRotation(double angle_rad, double max_rotate_rad) {
+  if (std::isfinite(angle_rad) && std::abs(angle_rad) <= max_rotate_rad) return "";
+  return "angle_rad = " + num(angle_rad) + " must be finite and within [-" + num(max_rotate_rad) + ", " +
+         num(max_rotate_rad) + "] rad (parameter max_rotate)";
+}
+
+std::string checkForward(double distance_m, double max_forward_m) {
+  if (std::isfinite(distance_m) && std::abs(distance_m) <= max_forward_m) return "";
+  return "distance_m = " + num(distance_m) + " must be finite and within [-" + num(max_forward_m) + ", " +
+         num(max_forward_m) + "] m (parameter max_forward)";
+}
+
+std::string checkStartPose(const Pose2D& pose, const World& world, double robot_radius_m) {
+  if (!pose.isFinite())
+    return "pose (" + num(pose.x) + ", " + num(pose.y) + ", " + num(pose.yaw) + ") is not finite";
+  if (std::abs(pose.yaw) > 2.0 * M_PI) return "pose theta = " + num(pose.yaw) + " rad is outside [-2 pi, 2 pi]";
+  const Eigen::Vector3f lo = world.minCorner(), hi = world.maxCorner();
+  if (pose.x - robot_radius_m < lo.x() || pose.x + robot_radius_m > hi.x() || pose.y - robot_radius_m < lo.y() ||
+      pose.y + robot_radius_m > hi.y())
+    return "pose " + pose.toString() + " puts the robot (radius " + num(robot_radius_m) + " m) outside the world " +
+           world.name() + " (x in [" + num(lo.x()) + ", " + num(hi.x()) + "], y in [" + num(lo.y()) + ", " +
+           num(hi.y()) + "] m)";
+  if (world.discCollides(Eigen::Vector2d(pose.x, pose.y), robot_radius_m))
+    return "pose " + pose.toString() + " puts the robot (radius " + num(robot_radius_m) + " m) into an obstacle of " +
+           world.name();
+  return "";
 }
 
 Simulator::Simulator(World world, SimConfig config, const Pose2D& start_in_world)
@@ -32,10 +77,8 @@ Simulator::Simulator(World world, SimConfig config, const Pose2D& start_in_world
 }
 
 void Simulator::reset(const Pose2D& start_in_world, int64_t seed) {
-  if (!start_in_world.isFinite()) throw std::invalid_argument("the start pose must be finite");
-  if (world_.discCollides(Eigen::Vector2d(start_in_world.x, start_in_world.y), config_.robot_radius_m))
-    throw std::invalid_argument("start pose " + start_in_world.toString() + " puts the robot (radius " +
-                                std::to_string(config_.robot_radius_m) + " m) into an obstacle of " + world_.name());
+  const std::string problem = checkStartPose(start_in_world, world_, config_.robot_radius_m);
+  if (!problem.empty()) throw std::invalid_argument(problem);
   start_ = start_in_world;
   true_world_ = start_in_world;
   odom_ = Pose2D();
@@ -104,9 +147,8 @@ ScanOutput Simulator::scan(int planes) {
 }
 
 MotionOutput Simulator::forward(double distance_m) {
-  if (!std::isfinite(distance_m) || std::abs(distance_m) > config_.max_forward_m)
-    throw std::invalid_argument("forward distance " + std::to_string(distance_m) + " m is outside [-" +
-                                std::to_string(config_.max_forward_m) + ", " + std::to_string(config_.max_forward_m) + "] m");
+  const std::string problem = checkForward(distance_m, config_.max_forward_m);
+  if (!problem.empty()) throw std::invalid_argument(problem);
   MotionOutput out;
   const ForwardSample f = sampleForward(config_.errors.motion, distance_m, rng_);
   const double length = std::abs(f.true_length_m);
@@ -135,8 +177,8 @@ MotionOutput Simulator::forward(double distance_m) {
 }
 
 MotionOutput Simulator::rotate(double angle_rad) {
-  if (!std::isfinite(angle_rad) || std::abs(angle_rad) > 4.0 * M_PI)
-    throw std::invalid_argument("rotation " + std::to_string(angle_rad) + " rad is outside [-4 pi, 4 pi]");
+  const std::string problem = checkRotation(angle_rad, config_.max_rotate_rad);
+  if (!problem.empty()) throw std::invalid_argument(problem);
   MotionOutput out;
   const Pose2D delta = sampleRotation(config_.errors.motion, angle_rad, rng_);
   const Pose2D next = true_world_ * delta;

@@ -338,6 +338,113 @@ TEST(Worlds, RealHouseFullScanAtStartPose) {
   EXPECT_EQ(near_surface, checked);
 }
 
+
+// ---- Bad requests (issue 9): each check names what is wrong, the simulator's state is unchanged.
+
+TEST(RequestChecks, ScanPlanesOnlyTheFourCounts) {
+  for (long ok : {50L, 100L, 200L, 400L}) EXPECT_EQ(checkScanPlanes(ok), "") << ok;
+  for (long bad : {0L, 1L, 49L, 123L, 401L, 65535L, -100L}) {
+    const std::string m = checkScanPlanes(bad);
+    EXPECT_NE(m.find("planes = " + std::to_string(bad)), std::string::npos) << m;
+    EXPECT_NE(m.find("50, 100, 200, 400"), std::string::npos) << m;
+  }
+}
+
+TEST(RequestChecks, RotationNaNInfAndAbsurdAnglesAreRefused) {
+  EXPECT_EQ(checkRotation(0.0, 2 * M_PI), "");
+  EXPECT_EQ(checkRotation(-2 * M_PI, 2 * M_PI), "");
+  EXPECT_EQ(checkRotation(1.0, 1.0), "");
+  for (double bad : {std::nan(""), double(INFINITY), -double(INFINITY), 50.0, -50.0, 2 * M_PI + 1e-6}) {
+    const std::string m = checkRotation(bad, 2 * M_PI);
+    EXPECT_NE(m.find("angle_rad"), std::string::npos) << bad;
+    EXPECT_NE(m.find("max_rotate"), std::string::npos) << m;
+  }
+  EXPECT_NE(checkRotation(std::nan(""), 2 * M_PI).find("nan"), std::string::npos);
+  EXPECT_NE(checkRotation(50.0, 2 * M_PI).find("50"), std::string::npos);
+}
+
+TEST(RequestChecks, ForwardNaNInfAndAbsurdDistancesAreRefused) {
+  EXPECT_EQ(checkForward(0.0, 5.0), "");
+  EXPECT_EQ(checkForward(-5.0, 5.0), "");
+  for (double bad : {std::nan(""), double(INFINITY), -double(INFINITY), 100.0, -100.0, 5.001}) {
+    const std::string m = checkForward(bad, 5.0);
+    EXPECT_NE(m.find("distance_m"), std::string::npos) << bad;
+    EXPECT_NE(m.find("[-5, 5] m (parameter max_forward)"), std::string::npos) << m;
+  }
+}
+
+TEST(RequestChecks, StartPoseOutsideTheWorldInAnObstacleOrNotFiniteIsRefused) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  b.box({2.0, -5, 0}, {2.1, 5, 2.5});
+  const World world = World::fromMesh(b.mesh(), "wall");
+  EXPECT_EQ(checkStartPose(Pose2D(0, 0, 1.0), world, 0.26), "");
+  EXPECT_NE(checkStartPose(Pose2D(std::nan(""), 0, 0), world, 0.26).find("not finite"), std::string::npos);
+  EXPECT_NE(checkStartPose(Pose2D(0, double(INFINITY), 0), world, 0.26).find("not finite"), std::string::npos);
+  EXPECT_NE(checkStartPose(Pose2D(0, 0, 50.0), world, 0.26).find("theta = 50"), std::string::npos);
+  EXPECT_NE(checkStartPose(Pose2D(1000, 1000, 0), world, 0.26).find("outside the world wall"), std::string::npos);
+  EXPECT_NE(checkStartPose(Pose2D(4.9, 0, 0), world, 0.26).find("outside the world"), std::string::npos);
+  EXPECT_NE(checkStartPose(Pose2D(2.05, 0, 0), world, 0.26).find("into an obstacle"), std::string::npos);
+}
+
+TEST(RequestChecks, SimulatorRefusesBadMotionsAndResetsWithoutChangingItsState) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  SimConfig config;
+  config.max_rotate_rad = 3.0;
+  Simulator sim(World::fromMesh(b.mesh(), "open"), config, Pose2D(0, 0, 0));
+  sim.forward(1.0);
+  const Pose2D truth = sim.trueInWorld(), odom = sim.odometry(), start = sim.start();
+  const double clock = sim.clock();
+  EXPECT_THROW(sim.forward(100.0), std::invalid_argument);
+  EXPECT_THROW(sim.forward(std::nan("")), std::invalid_argument);
+  EXPECT_THROW(sim.rotate(3.1), std::invalid_argument);  // the configured max_rotate
+  EXPECT_THROW(sim.rotate(-double(INFINITY)), std::invalid_argument);
+  EXPECT_THROW(sim.reset(Pose2D(100, 0, 0), 5), std::invalid_argument);
+  EXPECT_THROW(sim.scan(0), std::invalid_argument);
+  EXPECT_EQ(sim.trueInWorld().toString(), truth.toString());
+  EXPECT_EQ(sim.odometry().toString(), odom.toString());
+  EXPECT_EQ(sim.start().toString(), start.toString());
+  EXPECT_EQ(sim.clock(), clock);
+  EXPECT_NO_THROW(sim.rotate(2.9));
+}
+
+TEST(ConfigChecks, BadValuesNameTheSimNodeParameter) {
+  auto message = [](const SimConfig& c, const std::string& prefix) {
+    try {
+      c.validate(prefix);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  SimConfig c;
+  EXPECT_EQ(message(c, "profiles/thesis/"), "");
+  c.scanner.height_m = 7.0;
+  EXPECT_NE(message(c, "").find("'scanner/height' = 7 m is out of range [0.05, 3 m]"), std::string::npos) << message(c, "");
+  c = SimConfig();
+  c.scanner.plane_time_s = -0.1;
+  EXPECT_NE(message(c, "").find("scanner/plane_time"), std::string::npos);
+  c = SimConfig();
+  c.errors.sensor.p_hit = std::nan("");
+  EXPECT_NE(message(c, "profiles/thesis/").find("'profiles/thesis/sensor/p_hit' = nan"), std::string::npos);
+  c = SimConfig();
+  c.errors.motion.curvature_per_m = 3.0;
+  EXPECT_NE(message(c, "profiles/perfect/").find("'profiles/perfect/motion/curvature' = 3"), std::string::npos);
+  c = SimConfig();
+  c.errors.motion.linear_speed_mps = 20.0;
+  EXPECT_NE(message(c, "").find("'motion/linear_speed' = 20 m/s is out of range [0.01, 1.5 m/s]"), std::string::npos);
+  c = SimConfig();
+  c.max_forward_m = 1000.0;
+  EXPECT_NE(message(c, "").find("'max_forward' = 1000 m"), std::string::npos);
+  c = SimConfig();
+  c.max_rotate_rad = 50.0;
+  EXPECT_NE(message(c, "").find("'max_rotate' = 50 rad"), std::string::npos);
+  c = SimConfig();
+  c.robot_radius_m = -1.0;
+  EXPECT_NE(message(c, "").find("'robot_radius' = -1 m"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace sim
 }  // namespace scanstop

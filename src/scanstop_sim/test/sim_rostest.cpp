@@ -4,11 +4,16 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <scanstop_msgs/Forward.h>
+#include <scanstop_msgs/ResetSim.h>
 #include <scanstop_msgs/Rotate.h>
 #include <scanstop_msgs/TakeScan.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <array>
 #include <cmath>
+#include <future>
+#include <utility>
+#include <vector>
 
 #include "scanstop_common/ros/msg_conversion.h"
 
@@ -134,6 +139,114 @@ TEST(SimNode, LateTfSubscriberGetsTheCurrentPose) {
   const auto world_map = buffer.lookupTransform("world", "map", ros::Time(0)).transform;
   EXPECT_NEAR(world_map.translation.x, 2.0, 1e-9);
   EXPECT_NEAR(world_map.translation.y, 5.0, 1e-9);
+}
+
+/// The robot's state as the node publishes it: ground truth (map frame) and odometry.
+std::pair<Pose2D, Pose2D> robotState() {
+  const auto odom = ros::topic::waitForMessage<nav_msgs::Odometry>("odom", ros::Duration(5.0));
+  EXPECT_TRUE(odom != nullptr);
+  return {groundTruth(), odom ? scanstop::ros_conv::fromPoseMsg(odom->pose.pose) : Pose2D()};
+}
+
+void expectUnchanged(const std::pair<Pose2D, Pose2D>& before, const std::string& what) {
+  const auto after = robotState();
+  EXPECT_EQ(after.first.toString(), before.first.toString()) << "ground truth changed by " << what;
+  EXPECT_EQ(after.second.toString(), before.second.toString()) << "odometry changed by " << what;
+}
+
+TEST(SimNode, BadRequestsAreRefusedAndChangeNothing) {
+  const auto before = robotState();
+  scanstop_msgs::Forward forward;
+  for (double d : {100.0, -100.0, std::nan(""), double(INFINITY)}) {
+    forward.request.distance_m = d;
+    forward = call("base/forward", forward);
+    EXPECT_FALSE(forward.response.success) << d;
+    EXPECT_NE(forward.response.message.find("distance_m"), std::string::npos) << forward.response.message;
+    EXPECT_NE(forward.response.message.find("max_forward"), std::string::npos) << forward.response.message;
+    expectUnchanged(before, "forward " + std::to_string(d));
+  }
+  scanstop_msgs::Rotate rotate;
+  for (double a : {50.0, -7.0, std::nan(""), -double(INFINITY)}) {
+    rotate.request.angle_rad = a;
+    rotate = call("base/rotate", rotate);
+    EXPECT_FALSE(rotate.response.success) << a;
+    EXPECT_NE(rotate.response.message.find("angle_rad"), std::string::npos) << rotate.response.message;
+    EXPECT_NE(rotate.response.message.find("max_rotate"), std::string::npos) << rotate.response.message;
+    expectUnchanged(before, "rotate " + std::to_string(a));
+  }
+  scanstop_msgs::TakeScan scan;
+  for (int planes : {0, 1, 123, 401}) {
+    scan.request.planes = static_cast<uint16_t>(planes);
+    scan = call("scanner/take_scan", scan);
+    EXPECT_FALSE(scan.response.success);
+    EXPECT_NE(scan.response.message.find("planes = " + std::to_string(planes)), std::string::npos) << scan.response.message;
+    EXPECT_EQ(scan.response.cloud.data.size(), 0u);
+  }
+  scanstop_msgs::ResetSim reset;
+  const std::vector<std::pair<std::array<double, 3>, std::string>> poses{
+      {{std::nan(""), 5.0, 0.0}, "not finite"},
+      {{1000.0, 5.0, 0.0}, "outside the world"},
+      {{2.0, 5.0, 50.0}, "theta = 50"},
+      {{0.05, 5.0, 0.0}, "puts the robot"}};
+  for (const auto& p : poses) {
+    reset.request.pose.x = p.first[0];
+    reset.request.pose.y = p.first[1];
+    reset.request.pose.theta = p.first[2];
+    reset.request.seed = 3;
+    reset = call("sim/reset", reset);
+    EXPECT_FALSE(reset.response.success);
+    EXPECT_NE(reset.response.message.find(p.second), std::string::npos) << reset.response.message;
+    expectUnchanged(before, "reset " + reset.response.message);
+  }
+}
+
+TEST(SimNode, ScanIsRefusedWhileTheBaseMoves) {
+  // Back at the start (room_10x8: world 2, 5) facing north, where 1.5 m ahead is free.
+  scanstop_msgs::ResetSim reset;
+  reset.request.pose.x = 2.0;
+  reset.request.pose.y = 5.0;
+  reset.request.pose.theta = M_PI / 2;
+  reset.request.seed = -1;
+  reset = call("sim/reset", reset);
+  ASSERT_TRUE(reset.response.success) << reset.response.message;
+  // motion_time_scale 0.2 (sim.test): 1.5 m at 0.2 m/s take 7.5 s modelled, 1.5 s on the wall clock.
+  scanstop_msgs::Forward forward;
+  forward.request.distance_m = 1.5;
+  auto motion = std::async(std::launch::async, [forward] { return call("base/forward", forward); });
+  // odom shows the motion while it runs.
+  nav_msgs::Odometry::ConstPtr odom;
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(1.0);
+  while (ros::WallTime::now() < deadline) {
+    odom = ros::topic::waitForMessage<nav_msgs::Odometry>("odom", ros::Duration(0.2));
+    if (odom && odom->twist.twist.linear.x > 0.0) break;
+  }
+  ASSERT_TRUE(odom != nullptr);
+  EXPECT_NEAR(odom->twist.twist.linear.x, 0.2, 1e-9);
+  scanstop_msgs::TakeScan scan;
+  scan.request.planes = 50;
+  const ros::WallTime asked = ros::WallTime::now();
+  scan = call("scanner/take_scan", scan);
+  EXPECT_FALSE(scan.response.success);
+  EXPECT_NE(scan.response.message.find("the base is moving"), std::string::npos) << scan.response.message;
+  EXPECT_LT((ros::WallTime::now() - asked).toSec(), 0.5) << "the refusal must not wait for the motion";
+  // A second motion meanwhile is refused as well, a reset too.
+  scanstop_msgs::Rotate rotate;
+  rotate.request.angle_rad = 1.0;
+  rotate = call("base/rotate", rotate);
+  EXPECT_FALSE(rotate.response.success);
+  EXPECT_NE(rotate.response.message.find("another rotate/forward motion"), std::string::npos) << rotate.response.message;
+  reset.request.pose.theta = 0.0;
+  EXPECT_FALSE(call("sim/reset", reset).response.success);
+  const scanstop_msgs::Forward done = motion.get();
+  EXPECT_TRUE(done.response.success) << done.response.message;
+  EXPECT_NEAR(done.response.achieved_distance_m, 1.5, 1e-9);
+  EXPECT_NEAR(scanstop::ros_conv::fromPoseMsg(done.response.odom_pose.pose).x, 1.5, 1e-9);  // odometry restarted at the reset
+  // Standing again: odom at rest, the scan works.
+  const auto rest = ros::topic::waitForMessage<nav_msgs::Odometry>("odom", ros::Duration(5.0));
+  ASSERT_TRUE(rest != nullptr);
+  EXPECT_EQ(rest->twist.twist.linear.x, 0.0);
+  scan = call("scanner/take_scan", scan);
+  EXPECT_TRUE(scan.response.success) << scan.response.message;
 }
 
 }  // namespace

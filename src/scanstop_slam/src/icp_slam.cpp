@@ -1,6 +1,9 @@
 #include "scanstop_slam/icp_slam.h"
 
 #include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
 
 #include "scanstop_common/config.h"
 
@@ -13,6 +16,26 @@ void SlamConfig::validate() const {
   requireInRange("source_voxel", source_voxel_m, 0.0, 1.0, "m");
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
+  requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
+  requireInRange("max_odom_jump", max_odom_jump_m, 0.01, 100000.0, "m");
+}
+
+std::string scanProblem(const PointCloud& scan_base, double max_point_distance_m) {
+  if (scan_base.empty()) return "the cloud has no points";
+  size_t finite = 0;
+  for (size_t i = 0; i < scan_base.points.size(); ++i) {
+    const Eigen::Vector3f& p = scan_base.points[i];
+    if (p.hasNaN()) continue;  // NaN marks a beam without a return
+    std::ostringstream where;
+    where << "point " << i << " (" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+    if (!p.allFinite()) return where.str() + " has an infinite coordinate";
+    if (p.cast<double>().norm() > max_point_distance_m)
+      return where.str() + " is " + std::to_string(p.norm()) + " m from base_link, beyond max_point_distance " +
+             std::to_string(max_point_distance_m) + " m";
+    ++finite;
+  }
+  if (finite == 0) return "the cloud has no finite point (all " + std::to_string(scan_base.size()) + " are NaN)";
+  return "";
 }
 
 IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
@@ -20,11 +43,37 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
   if (map_dir.empty()) return;
   dir_ = std::make_unique<MapDirectory>(map_dir);
   for (size_t i = 0; i < dir_->size(); ++i) {
-    map_.add(dir_->loadScanInMap(i).points);
-    last_map_ = dir_->scans()[i].map_pose;
-    last_odom_ = dir_->scans()[i].odom_pose;
+    const MapScanInfo& info = dir_->scans()[i];
+    // The pose is kept either way (the trajectory goes on from the last scan).
+    last_map_ = info.map_pose;
+    last_odom_ = info.odom_pose;
+    PointCloud scan;
+    try {
+      scan = dir_->loadScan(i);
+    } catch (const std::exception& e) {
+      skipped_.push_back({info.index, dir_->dir() + "/" + info.file, e.what()});
+      continue;
+    }
+    const std::string problem = scanProblem(scan, config_.max_point_distance_m);
+    if (!problem.empty()) {
+      skipped_.push_back({info.index, dir_->dir() + "/" + info.file, problem});
+      continue;
+    }
+    map_.add(transformCloud(scan, info.map_pose.toIsometry3f()).points);
   }
   count_ = dir_->size();
+}
+
+std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
+  if (!std::isfinite(odom_pose.x) || !std::isfinite(odom_pose.y) || !std::isfinite(odom_pose.yaw))
+    return "the odometry pose " + odom_pose.toString() + " is not finite";
+  if (count_ == 0) return "";
+  const double jump = std::hypot(odom_pose.x - last_odom_.x, odom_pose.y - last_odom_.y);
+  if (jump > config_.max_odom_jump_m)
+    return "the odometry pose " + odom_pose.toString() + " is " + std::to_string(jump) +
+           " m from the last scan's " + last_odom_.toString() + ", beyond max_odom_jump " +
+           std::to_string(config_.max_odom_jump_m) + " m (an odometry reset or a corrupt pose)";
+  return "";
 }
 
 std::vector<Eigen::Vector3f> IcpSlam::coarseSource(const std::vector<Eigen::Vector3f>& source) const {
@@ -35,6 +84,12 @@ std::vector<Eigen::Vector3f> IcpSlam::coarseSource(const std::vector<Eigen::Vect
 Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& odom_pose,
                                    const Eigen::Vector3d& sensor_origin, double stamp_s) {
   const auto start = std::chrono::steady_clock::now();
+  // Every check before anything changes: a refused scan leaves the map, the directory and the poses as they were.
+  std::string problem = scanProblem(scan_base, config_.max_point_distance_m);
+  if (problem.empty()) problem = odomProblem(odom_pose);
+  if (problem.empty() && !sensor_origin.allFinite()) problem = "the sensor origin is not finite";
+  if (problem.empty() && !std::isfinite(stamp_s)) problem = "the stamp is not finite";
+  if (!problem.empty()) throw std::invalid_argument(problem);
   Registration r;
   r.index = static_cast<uint32_t>(count_);
   // Initial guess: the last corrected pose composed with the odometry delta since then. The first

@@ -14,11 +14,13 @@
 #include <memory>
 #include <mutex>
 
+#include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_slam/icp_slam.h"
+#include "scanstop_slam/request_check.h"
 
 namespace scanstop {
 namespace slam {
@@ -27,46 +29,76 @@ class IcpSlamNode {
  public:
   IcpSlamNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     SlamConfig config;
+    std::vector<std::string> known;
+    const auto optional = [&](const std::string& name, auto& value) {
+      known.push_back(name);
+      ros_params::optional(pnh, name, value);
+    };
     std::string mode = "3dof";
-    ros_params::optional(pnh, "mode", mode);
+    optional("mode", mode);
     requireMode(pnh, mode);
     config.icp.six_dof = mode == "6dof";
-    ros_params::optional(pnh, "c_max", config.icp.c_max_m);
-    ros_params::optional(pnh, "t_c", config.icp.t_c_m);
+    optional("c_max", config.icp.c_max_m);
+    optional("t_c", config.icp.t_c_m);
     double r_c_deg = config.icp.r_c_rad * 180.0 / M_PI;
-    ros_params::optional(pnh, "r_c_deg", r_c_deg);
+    optional("r_c_deg", r_c_deg);
+    requireInRange(pnh.resolveName("r_c_deg"), r_c_deg, 1e-7, 45.0, "deg");
     config.icp.r_c_rad = r_c_deg * M_PI / 180.0;
-    ros_params::optional(pnh, "max_iterations", config.icp.max_iterations);
-    ros_params::optional(pnh, "min_correspondences", config.icp.min_correspondences);
-    ros_params::optional(pnh, "min_overlap", config.icp.min_overlap);
-    ros_params::optional(pnh, "max_correction", config.icp.max_correction_m);
-    ros_params::optional(pnh, "max_correction_angle", config.icp.max_correction_rad);
-    ros_params::optional(pnh, "source_voxel", config.source_voxel_m);
-    ros_params::optional(pnh, "max_points_per_voxel", config.max_points_per_voxel);
-    ros_params::optional(pnh, "map_spacing", config.map_spacing_m);
-    ros_params::optional(pnh, "coarse_c_max", config.coarse_c_max_m);
-    ros_params::optional(pnh, "accelerate", config.icp.accelerate);
-    ros_params::optional(pnh, "ignore_horizontal", config.icp.ignore_horizontal);
-    ros_params::optional(pnh, "map_cloud_voxel", map_cloud_voxel_m_);
-    ros_params::optional(pnh, "sensor_height", sensor_height_m_);
-    ros_params::optional(pnh, "map_frame", map_frame_);
-    ros_params::optional(pnh, "odom_frame", odom_frame_);
-    ros_params::optional(pnh, "base_frame", base_frame_);
+    optional("max_iterations", config.icp.max_iterations);
+    optional("min_correspondences", config.icp.min_correspondences);
+    optional("min_overlap", config.icp.min_overlap);
+    optional("max_correction", config.icp.max_correction_m);
+    optional("max_correction_angle", config.icp.max_correction_rad);
+    optional("source_voxel", config.source_voxel_m);
+    optional("max_points_per_voxel", config.max_points_per_voxel);
+    optional("map_spacing", config.map_spacing_m);
+    optional("coarse_c_max", config.coarse_c_max_m);
+    optional("accelerate", config.icp.accelerate);
+    optional("ignore_horizontal", config.icp.ignore_horizontal);
+    optional("max_point_distance", config.max_point_distance_m);
+    optional("max_odom_jump", config.max_odom_jump_m);
+    optional("max_cloud_points", max_cloud_points_);
+    optional("map_cloud_voxel", map_cloud_voxel_m_);
+    optional("sensor_height", sensor_height_m_);
+    optional("map_frame", map_frame_);
+    optional("odom_frame", odom_frame_);
+    optional("base_frame", base_frame_);
     std::string map_dir;
-    ros_params::optional(pnh, "map_dir", map_dir);
-    config.validate();
+    optional("map_dir", map_dir);
+    bool subscribe_scans = false;
+    optional("subscribe_scans", subscribe_scans);
+    for (const std::string& name : ros_params::unknownParameters(pnh, known))
+      ROS_WARN("icp_slam_node: ignoring unknown parameter '%s' (a typo?)", name.c_str());
+    try {
+      config.validate();
+      requireInRange("max_cloud_points", max_cloud_points_, 1, 1e8);
+      requireInRange("map_cloud_voxel", map_cloud_voxel_m_, 0.0, 10.0, "m");
+      requireInRange("sensor_height", sensor_height_m_, -10.0, 10.0, "m");
+    } catch (const ConfigError& e) {
+      throw ConfigError(std::string(e.what()) + " (in namespace " + pnh.getNamespace() + ")");
+    }
+    for (const auto& frame : {std::make_pair("map_frame", &map_frame_), std::make_pair("odom_frame", &odom_frame_),
+                              std::make_pair("base_frame", &base_frame_)})
+      if (frame.second->empty() || frame.second->front() == '/' || frame.second->find(' ') != std::string::npos)
+        throw ConfigError("parameter '" + pnh.resolveName(frame.first) + "' = '" + *frame.second +
+                          "' must be a non-empty frame id without a leading '/' or spaces");
+    if (map_frame_ == odom_frame_ || map_frame_ == base_frame_ || odom_frame_ == base_frame_)
+      throw ConfigError("parameters '" + pnh.resolveName("map_frame") + "' = '" + map_frame_ + "', '" +
+                        pnh.resolveName("odom_frame") + "' = '" + odom_frame_ + "' and '" +
+                        pnh.resolveName("base_frame") + "' = '" + base_frame_ + "' must be three different frames");
     slam_ = std::make_unique<IcpSlam>(config, map_dir);
+    for (const SkippedScan& s : slam_->skippedScans())
+      ROS_ERROR("icp_slam_node: skipped scan %u of the map directory: %s", s.index,
+                (s.reason.find(s.file) == std::string::npos ? s.file + ": " + s.reason : s.reason).c_str());
     if (slam_->scanCount() > 0)
-      ROS_INFO("icp_slam_node: resumed the map in %s with %zu scans (%zu map points)", map_dir.c_str(),
-               slam_->scanCount(), slam_->map().size());
+      ROS_INFO("icp_slam_node: resumed the map in %s with %zu scans (%zu skipped, %zu map points)", map_dir.c_str(),
+               slam_->scanCount(), slam_->skippedScans().size(), slam_->map().size());
 
     pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("slam/pose", 10, true);
     path_pub_ = nh.advertise<nav_msgs::Path>("slam/path", 1, true);
     scan_pub_ = nh.advertise<scanstop_msgs::RegisteredScan>("slam/registered_scan", 50);
     map_pub_ = nh.advertise<sensor_msgs::PointCloud2>("slam/map_cloud", 1, true);
     server_ = nh.advertiseService("slam/register_scan", &IcpSlamNode::onRegister, this);
-    bool subscribe_scans = false;
-    ros_params::optional(pnh, "subscribe_scans", subscribe_scans);
     if (subscribe_scans) {
       // Every scan is kept (a registration takes about a second; scans come tens of seconds apart).
       odom_sub_ = nh.subscribe("odom", 200, &IcpSlamNode::onOdom, this);
@@ -130,30 +162,38 @@ class IcpSlamNode {
                                res.message.c_str());
   }
 
+  /// Everything about a request that can be checked before it touches the map; "" when it is fine.
+  std::string requestProblem(const scanstop_msgs::RegisterScan::Request& req) const {
+    std::string p = frameProblem(req.cloud.header.frame_id, base_frame_, "the cloud");
+    if (p.empty()) p = frameProblem(req.odom_pose.header.frame_id, odom_frame_, "odom_pose");
+    if (p.empty()) p = cloudLayoutProblem(req.cloud, static_cast<size_t>(max_cloud_points_));
+    if (p.empty()) p = poseProblem(req.odom_pose.pose, "odom_pose");
+    return p;
+  }
+
   bool onRegister(scanstop_msgs::RegisterScan::Request& req, scanstop_msgs::RegisterScan::Response& res) {
+    const auto refuse = [&](const std::string& why) {
+      res.success = false;
+      res.message = "bad request: " + why;
+      ROS_WARN("icp_slam_node: refused a scan: %s", res.message.c_str());
+      return true;
+    };
     PointCloud scan;
     Pose2D odom;
     try {
-      if (!req.cloud.header.frame_id.empty() && req.cloud.header.frame_id != base_frame_)
-        throw std::invalid_argument("the cloud is in frame '" + req.cloud.header.frame_id + "', expected '" +
-                                    base_frame_ + "' (the robot frame at scan time)");
+      const std::string problem = requestProblem(req);
+      if (!problem.empty()) return refuse(problem);
       scan = ros_conv::fromMsg(req.cloud);
       odom = ros_conv::fromPoseMsg(req.odom_pose.pose);
     } catch (const std::exception& e) {
-      res.success = false;
-      res.message = std::string("bad request: ") + e.what();
-      ROS_WARN("icp_slam_node: refused a scan: %s", res.message.c_str());
-      return true;
-    }
-    if (scan.countFinite() == 0) {
-      res.success = false;
-      res.message = "bad request: the cloud has no finite point";
-      return true;
+      return refuse(e.what());
     }
     Registration r;
     try {
       std::lock_guard<std::mutex> lock(mutex_);
       r = slam_->registerScan(scan, odom, Eigen::Vector3d(0, 0, sensor_height_m_), req.cloud.header.stamp.toSec());
+    } catch (const std::invalid_argument& e) {
+      return refuse(e.what());
     } catch (const std::exception& e) {
       res.success = false;
       res.message = std::string("could not store the scan: ") + e.what();
@@ -198,6 +238,7 @@ class IcpSlamNode {
 
   std::unique_ptr<IcpSlam> slam_;
   std::mutex mutex_;
+  int max_cloud_points_ = 5000000;
   double map_cloud_voxel_m_ = 0.05;
   double sensor_height_m_ = 0.45;
   std::string map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link";

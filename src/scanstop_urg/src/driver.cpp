@@ -1,6 +1,10 @@
 #include "scanstop_urg/driver.h"
 
+#include <utility>
+
+#include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/serial.h"
 
 namespace scanstop {
 namespace urg {
@@ -10,8 +14,13 @@ void DriverConfig::validate() const {
   if (platform_port.empty()) throw ConfigError("platform/port (the rotation controller's serial device) is empty");
   urg.validate();
   scanner.validate();
-  if (!(stepper.reply_timeout_s > 0.0) || !(stepper.home_timeout_s > 0.0) || stepper.retries < 0)
-    throw ConfigError("platform timeouts must be > 0 s and platform/retries >= 0");
+  for (const auto& baud : {std::make_pair("baud", urg_baud), std::make_pair("platform/baud", platform_baud)})
+    if (baud.second <= 0 || !isSupportedBaud(baud.second))
+      throw ConfigError("parameter '" + std::string(baud.first) + "' = " + std::to_string(baud.second) +
+                        " is not a supported rate (" + supportedBauds() + ")");
+  requireInRange("platform/reply_timeout", stepper.reply_timeout_s, 0.01, 60.0, "s");
+  requireInRange("platform/home_timeout", stepper.home_timeout_s, 0.01, 120.0, "s");
+  requireInRange("platform/retries", stepper.retries, 0, 20);
   if (urg.first_step != scanner.geometry.first_step || urg.last_step != scanner.geometry.last_step)
     throw ConfigError("scanner steps disagree between the device and the geometry");
 }

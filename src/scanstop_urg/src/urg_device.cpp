@@ -3,6 +3,7 @@
 #include <chrono>
 #include <sstream>
 
+#include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
 
 namespace scanstop {
@@ -24,10 +25,8 @@ int intField(const std::map<std::string, std::string>& m, const std::string& key
 }  // namespace
 
 void UrgConfig::validate() const {
-  if (!(reply_timeout_s > 0.0 && reply_timeout_s <= 60.0))
-    throw ConfigError("reply_timeout = " + std::to_string(reply_timeout_s) + " s must be in (0, 60]");
-  if (!(scan_timeout_s > 0.0 && scan_timeout_s <= 60.0))
-    throw ConfigError("scan_timeout = " + std::to_string(scan_timeout_s) + " s must be in (0, 60]");
+  requireInRange("reply_timeout", reply_timeout_s, 0.001, 60.0, "s");
+  requireInRange("scan_timeout", scan_timeout_s, 0.001, 60.0, "s");
   if (first_step < 0 || last_step < first_step || last_step > 9999)
     throw ConfigError("scanner steps " + std::to_string(first_step) + ".." + std::to_string(last_step) +
                       " must satisfy 0 <= first_step <= last_step");

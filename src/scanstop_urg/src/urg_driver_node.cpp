@@ -2,6 +2,10 @@
 
 #include <scanstop_msgs/Progress.h>
 
+#include <utility>
+#include <vector>
+
+#include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
@@ -49,9 +53,26 @@ DriverConfig readDriverConfig(const ros::NodeHandle& pnh) {
   return c;
 }
 
+StandstillConfig readStandstillConfig(const ros::NodeHandle& pnh) {
+  StandstillConfig c;
+  ros_params::optional(pnh, "standstill/max_linear_speed", c.max_linear_speed_mps);
+  ros_params::optional(pnh, "standstill/max_angular_speed", c.max_angular_speed_radps);
+  try {
+    c.validate();
+  } catch (const ConfigError& e) {
+    throw ConfigError(std::string("parameters of ") + pnh.getNamespace() + ": " + e.what());
+  }
+  return c;
+}
+
 UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
     : tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
   const DriverConfig config = readDriverConfig(pnh);
+  standstill_ = readStandstillConfig(pnh);
+  std::string odom_topic = "odom";
+  ros_params::optional(pnh, "odom_topic", odom_topic);
+  if (odom_topic.empty())
+    throw ConfigError("parameter '" + pnh.resolveName("odom_topic") + "' is empty: give the base's odometry topic");
   double reconnect_interval = 1.0, diagnostic_period = 1.0;
   ros_params::optional(pnh, "reconnect_interval", reconnect_interval);
   ros_params::optional(pnh, "diagnostic_period", diagnostic_period);
@@ -60,17 +81,20 @@ UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   ros_params::optional(pnh, "base_frame", base_frame_);
   ros_params::optional(pnh, "laser_frame", laser_frame_);
   ros_params::optional(pnh, "odom_frame", odom_frame_);
-  if (!(reconnect_interval >= 0.05 && reconnect_interval <= 600.0))
-    throw ConfigError("parameter '" + pnh.resolveName("reconnect_interval") + "' = " +
-                      std::to_string(reconnect_interval) + " s must be in [0.05, 600]");
-  if (!(diagnostic_period >= 0.05 && diagnostic_period <= 600.0))
-    throw ConfigError("parameter '" + pnh.resolveName("diagnostic_period") + "' = " +
-                      std::to_string(diagnostic_period) + " s must be in [0.05, 600]");
-  if (!(odom_timeout_s_ >= 0.0 && odom_timeout_s_ <= 60.0))
-    throw ConfigError("parameter '" + pnh.resolveName("odom_timeout") + "' = " + std::to_string(odom_timeout_s_) +
-                      " s must be in [0, 60]");
-  if (base_frame_.empty() || laser_frame_.empty() || odom_frame_.empty())
-    throw ConfigError("the frame parameters base_frame, laser_frame and odom_frame must not be empty");
+  requireInRange(pnh.resolveName("reconnect_interval"), reconnect_interval, 0.05, 600.0, "s");
+  requireInRange(pnh.resolveName("diagnostic_period"), diagnostic_period, 0.05, 600.0, "s");
+  requireInRange(pnh.resolveName("odom_timeout"), odom_timeout_s_, 0.0, 60.0, "s");
+  const std::vector<std::pair<std::string, std::string>> frames{
+      {"base_frame", base_frame_}, {"laser_frame", laser_frame_}, {"odom_frame", odom_frame_}};
+  for (size_t i = 0; i < frames.size(); ++i) {
+    if (frames[i].second.empty() || frames[i].second.find_first_of(" /") == 0)
+      throw ConfigError("parameter '" + pnh.resolveName(frames[i].first) + "' = '" + frames[i].second +
+                        "' must be a non-empty frame id without a leading '/' or space");
+    for (size_t j = 0; j < i; ++j)
+      if (frames[i].second == frames[j].second)
+        throw ConfigError("parameters '" + pnh.resolveName(frames[j].first) + "' and '" +
+                          pnh.resolveName(frames[i].first) + "' are both '" + frames[i].second + "': the frames must differ");
+  }
   driver_ = std::make_unique<UrgDriver>(config);
 
   Eigen::Isometry3d T_base_laser = Eigen::Isometry3d::Identity();
@@ -82,11 +106,19 @@ UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
 
   scan_pub_ = nh.advertise<sensor_msgs::PointCloud2>("scanner/last_scan", 1, true);
   progress_pub_ = nh.advertise<scanstop_msgs::Progress>("scanner/progress", 10);
+  odom_sub_ = nh.subscribe(odom_topic, 20, &UrgDriverNode::onOdom, this);
   take_scan_srv_ = nh.advertiseService("scanner/take_scan", &UrgDriverNode::onTakeScan, this);
   reconnect_timer_ = nh.createWallTimer(ros::WallDuration(reconnect_interval), &UrgDriverNode::onReconnectTimer, this);
   diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(diagnostic_period), &UrgDriverNode::onDiagnosticsTimer, this);
   ROS_INFO("rotating_urg_driver: URG on %s, platform on %s; connecting", config.urg_port.c_str(),
            config.platform_port.c_str());
+}
+
+void UrgDriverNode::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+  const std::string problem = baseMotionProblem(msg->twist.twist.linear.x, msg->twist.twist.angular.z, standstill_);
+  std::lock_guard<std::mutex> lock(odom_mutex_);
+  base_motion_ = problem;
+  if (scanning_ && !problem.empty() && moved_during_scan_.empty()) moved_during_scan_ = problem;
 }
 
 void UrgDriverNode::onReconnectTimer(const ros::WallTimerEvent&) {
@@ -147,12 +179,28 @@ bool UrgDriverNode::odomPose(geometry_msgs::PoseStamped* pose, std::string* erro
 }
 
 bool UrgDriverNode::onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res) {
-  if (req.planes != 50 && req.planes != 100 && req.planes != 200 && req.planes != 400) {
-    res.success = false;
-    res.message = "planes = " + std::to_string(req.planes) + " is not one of 50, 100, 200, 400";
-    return true;
-  }
+  res.success = false;
+  res.message = checkScanPlanes(req.planes);
+  if (!res.message.empty()) return true;
   std::lock_guard<std::mutex> lock(device_mutex_);
+  {
+    // Refused while the base moves (the last odom twist); a motion during the scan discards it.
+    std::lock_guard<std::mutex> odom_lock(odom_mutex_);
+    if (!base_motion_.empty()) {
+      res.message = base_motion_;
+      ROS_WARN("rotating_urg_driver: scan refused: %s", res.message.c_str());
+      return true;
+    }
+    scanning_ = true;
+    moved_during_scan_.clear();
+  }
+  struct ScanningFlag {
+    UrgDriverNode* node;
+    ~ScanningFlag() {
+      std::lock_guard<std::mutex> odom_lock(node->odom_mutex_);
+      node->scanning_ = false;
+    }
+  } scanning_flag{this};
   // The robot stands still during the scan: its odometry pose now is the pose of the scan.
   std::string tf_error;
   if (!odomPose(&res.odom_pose, &tf_error)) {
@@ -188,11 +236,18 @@ bool UrgDriverNode::onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_m
   res.counts.outliers_removed = scan.outliers_removed;
   res.success = scan.success;
   res.message = scan.message;
+  {
+    std::lock_guard<std::mutex> odom_lock(odom_mutex_);
+    if (res.success && !moved_during_scan_.empty()) {
+      res.success = false;
+      res.message = "the scan is discarded: the base moved during it (" + moved_during_scan_ + ")";
+    }
+  }
   progress.header.stamp = ros::Time::now();
-  progress.message = scan.message;
+  progress.message = res.message;
   progress_pub_.publish(progress);
-  if (!scan.success) {
-    ROS_WARN("rotating_urg_driver: scan failed: %s", scan.message.c_str());
+  if (!res.success) {
+    ROS_WARN("rotating_urg_driver: scan failed: %s", res.message.c_str());
     return true;  // no cloud: a failed scan is never published
   }
   res.cloud = ros_conv::toMsg(scan.cloud, base_frame_, ros::Time::now());

@@ -9,6 +9,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_urg/driver.h"
 #include "scanstop_urg/scanner.h"
+#include "scanstop_urg/standstill.h"
 
 namespace scanstop {
 namespace urg {
@@ -369,6 +370,83 @@ TEST(Serial, MissingPortIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/ttyACM9"), std::string::npos);
   }
   EXPECT_THROW(SerialPort("/dev/null", 12345), std::invalid_argument);
+}
+
+// ---- Bad requests and safety (issue 9).
+
+TEST(RequestChecks, ScanPlanesOnlyTheFourCounts) {
+  for (long ok : {50L, 100L, 200L, 400L}) EXPECT_EQ(checkScanPlanes(ok), "") << ok;
+  for (long bad : {0L, 7L, 49L, 401L, 65535L, -50L}) {
+    const std::string m = checkScanPlanes(bad);
+    EXPECT_NE(m.find("planes = " + std::to_string(bad)), std::string::npos) << m;
+    EXPECT_NE(m.find("50, 100, 200, 400"), std::string::npos) << m;
+  }
+}
+
+TEST(Standstill, AScanNeedsTheBaseStandingStill) {
+  const StandstillConfig c;
+  EXPECT_EQ(baseMotionProblem(0.0, 0.0, c), "");
+  EXPECT_EQ(baseMotionProblem(0.01, -0.02, c), "");  // the thresholds themselves: standing (odometry noise)
+  const std::string forward = baseMotionProblem(0.2, 0.0, c);
+  EXPECT_NE(forward.find("the base is moving"), std::string::npos) << forward;
+  EXPECT_NE(forward.find("v = 0.2 m/s"), std::string::npos) << forward;
+  EXPECT_NE(baseMotionProblem(-0.05, 0.0, c), "");  // backwards
+  EXPECT_NE(baseMotionProblem(0.0, 0.35, c).find("w = 0.35 rad/s"), std::string::npos);
+  EXPECT_NE(baseMotionProblem(0.0, -0.03, c), "");
+  EXPECT_NE(baseMotionProblem(std::nan(""), 0.0, c), "");  // a non-finite twist counts as moving
+  EXPECT_NE(baseMotionProblem(0.0, double(INFINITY), c), "");
+}
+
+TEST(Standstill, ThresholdsAreValidatedWithTheParameterName) {
+  StandstillConfig c;
+  EXPECT_NO_THROW(c.validate());
+  c.max_linear_speed_mps = -1.0;
+  try {
+    c.validate();
+    ADD_FAILURE() << "accepted a negative threshold";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("'standstill/max_linear_speed' = -1 m/s is out of range [0, 0.5 m/s]"),
+              std::string::npos) << e.what();
+  }
+  c = StandstillConfig();
+  c.max_angular_speed_radps = std::nan("");
+  EXPECT_THROW(c.validate(), ConfigError);
+}
+
+TEST(DriverConfigChecks, BadValuesNameTheParameterValueAndRange) {
+  auto message = [](const DriverConfig& c) {
+    try {
+      c.validate();
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  DriverConfig c;
+  EXPECT_EQ(message(c), "");
+  c.urg_baud = 12345;
+  EXPECT_NE(message(c).find("'baud' = 12345 is not a supported rate (9600"), std::string::npos) << message(c);
+  c = DriverConfig();
+  c.platform_baud = -9600;
+  EXPECT_NE(message(c).find("'platform/baud' = -9600"), std::string::npos) << message(c);
+  c = DriverConfig();
+  c.urg.reply_timeout_s = -1.0;
+  EXPECT_NE(message(c).find("'reply_timeout' = -1 s is out of range [0.001, 60 s]"), std::string::npos) << message(c);
+  c = DriverConfig();
+  c.urg.scan_timeout_s = std::nan("");
+  EXPECT_NE(message(c).find("'scan_timeout' = nan s"), std::string::npos) << message(c);
+  c = DriverConfig();
+  c.stepper.home_timeout_s = 0.0;
+  EXPECT_NE(message(c).find("'platform/home_timeout' = 0 s is out of range"), std::string::npos) << message(c);
+  c = DriverConfig();
+  c.stepper.retries = -2;
+  EXPECT_NE(message(c).find("'platform/retries' = -2"), std::string::npos) << message(c);
+  c = DriverConfig();
+  c.scanner.geometry.height_m = 7.0;
+  EXPECT_NE(message(c).find("'scanner/height' = 7 m"), std::string::npos) << message(c);
+  c = DriverConfig();
+  c.scanner.max_plane_retries = 50;
+  EXPECT_NE(message(c).find("max_plane_retries = 50 must be in 0..20"), std::string::npos) << message(c);
 }
 
 }  // namespace

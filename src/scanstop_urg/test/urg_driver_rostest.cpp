@@ -6,7 +6,9 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <scanstop_msgs/Progress.h>
 #include <scanstop_msgs/TakeScan.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
@@ -16,6 +18,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <future>
 #include <map>
 #include <mutex>
 
@@ -272,6 +275,9 @@ TEST(RotatingUrgDriver, ShippedConfigEqualsTheDefaultsAndBadValuesAreNamed) {
   EXPECT_EQ(c.scanner.outlier_filter, d.scanner.outlier_filter);
   EXPECT_EQ(c.scanner.filter.tolerance_abs_m, d.scanner.filter.tolerance_abs_m);
   EXPECT_EQ(c.scanner.filter.tolerance_rel, d.scanner.filter.tolerance_rel);
+  const scanstop::urg::StandstillConfig st = scanstop::urg::readStandstillConfig(ros::NodeHandle("/urg_yaml")), dst;
+  EXPECT_EQ(st.max_linear_speed_mps, dst.max_linear_speed_mps);
+  EXPECT_EQ(st.max_angular_speed_radps, dst.max_angular_speed_radps);
   ros::NodeHandle bad("/urg_bad");
   bad.setParam("scanner/height", 7.0);
   try {
@@ -287,6 +293,70 @@ TEST(RotatingUrgDriver, ShippedConfigEqualsTheDefaultsAndBadValuesAreNamed) {
   } catch (const scanstop::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("/urg_bad/scanner/height"), std::string::npos) << e.what();
   }
+}
+
+/// Publishes base odometry with a twist (the base driver's odom topic).
+void publishTwist(ros::Publisher& pub, double v, double w) {
+  nav_msgs::Odometry odom;
+  odom.header.stamp = ros::Time::now();
+  odom.header.frame_id = "odom";
+  odom.child_frame_id = "base_link";
+  odom.pose.pose.orientation.w = 1.0;
+  odom.twist.twist.linear.x = v;
+  odom.twist.twist.angular.z = w;
+  pub.publish(odom);
+  ros::WallDuration(0.3).sleep();  // let the driver receive it
+}
+
+TEST(RotatingUrgDriver, ScanIsRefusedWhileTheBaseMovesAndDiscardedWhenItMovedDuringTheScan) {
+  ASSERT_TRUE(waitConnected(true, 30.0)) << diag("message");
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<nav_msgs::Odometry>("odom", 5);
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(10.0);
+  while (pub.getNumSubscribers() == 0 && ros::WallTime::now() < end) ros::WallDuration(0.05).sleep();
+  ASSERT_GT(pub.getNumSubscribers(), 0u) << "rotating_urg_driver does not subscribe to odom";
+  const int published_before = g_last_scan_msgs;
+
+  // Driving forward: refused at once, nothing published.
+  publishTwist(pub, 0.2, 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  scanstop_msgs::TakeScan srv = scan(50);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.5);
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("the base is moving"), std::string::npos) << srv.response.message;
+  EXPECT_NE(srv.response.message.find("v = 0.2 m/s"), std::string::npos) << srv.response.message;
+  // Turning on the spot: refused.
+  publishTwist(pub, 0.0, -0.35);
+  srv = scan(50);
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("w = -0.35 rad/s"), std::string::npos) << srv.response.message;
+
+  // Standing: the scan works.
+  publishTwist(pub, 0.0, 0.0);
+  srv = scan(50);
+  EXPECT_TRUE(srv.response.success) << srv.response.message;
+
+  // The base starts moving during a scan (after its 10th plane): the scan is discarded.
+  std::atomic<uint32_t> done{0};
+  ros::Subscriber progress = nh.subscribe<scanstop_msgs::Progress>(
+      "scanner/progress", 20, [&done](const scanstop_msgs::Progress::ConstPtr& m) { done = m->done; });
+  ros::WallDuration(0.5).sleep();
+  done = 0;
+  auto running = std::async(std::launch::async, [] { return scan(400); });
+  const ros::WallTime end2 = ros::WallTime::now() + ros::WallDuration(20.0);
+  while (done < 10 && ros::WallTime::now() < end2) ros::WallDuration(0.01).sleep();
+  ASSERT_GE(done, 10u) << "no progress from the scan";
+  publishTwist(pub, 0.1, 0.0);
+  publishTwist(pub, 0.0, 0.0);  // stopped again before the scan ends: it is discarded all the same
+  srv = running.get();
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("the scan is discarded: the base moved during it"), std::string::npos)
+      << srv.response.message;
+  ros::WallDuration(0.3).sleep();
+  EXPECT_EQ(g_last_scan_msgs, published_before + 1) << "a refused or discarded scan was published";
+  // Standing still: scans work again.
+  srv = scan(50);
+  EXPECT_TRUE(srv.response.success) << srv.response.message;
 }
 
 TEST(StaleStream, HandshakeStopsTheStreamAndScans) {

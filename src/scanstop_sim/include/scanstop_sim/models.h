@@ -34,7 +34,8 @@ struct ScannerConfig {
   Eigen::Vector3f direction(int plane, int planes, int beam) const;
   /// Origin of the beams of plane `plane` in base_link.
   Eigen::Vector3f origin(int plane, int planes) const;
-  void validate() const;
+  /// Throws ConfigError naming the parameter (sim_node's name: `prefix` + field, e.g. scanner/height).
+  void validate(const std::string& prefix = "scanner/") const;
 };
 
 /// Error model of one range reading (thesis 6.3) and of the transmission (chapter 3).
@@ -45,7 +46,8 @@ struct SensorNoiseConfig {
   double sigma_near_m = 0.0;       ///< standard deviation of a normal reading up to 1 m [m]
   double sigma_far_rel = 0.0;      ///< ... relative to the range beyond 1 m
   double p_plane_loss = 0.0;       ///< probability that a whole plane is lost in transmission
-  void validate() const;
+  /// Throws ConfigError naming the parameter (`prefix` + field, e.g. profiles/thesis/sensor/p_hit).
+  void validate(const std::string& prefix = "sensor/") const;
 };
 
 /// Robot motion error model (thesis 6.2). Odometry always reports the commanded motion; the true
@@ -65,7 +67,9 @@ struct MotionConfig {
   // speeds (modelled durations)
   double linear_speed_mps = 0.2;       ///< [m/s]
   double angular_speed_radps = 0.5;    ///< [rad/s]
-  void validate() const;
+  /// Throws ConfigError naming the parameter: error fields as `error_prefix` + field (e.g.
+  /// profiles/thesis/motion/curvature), the speeds as `speed_prefix` + field (motion/linear_speed).
+  void validate(const std::string& error_prefix = "motion/", const std::string& speed_prefix = "motion/") const;
 };
 
 /// A named set of error models.

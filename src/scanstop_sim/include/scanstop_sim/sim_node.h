@@ -13,7 +13,9 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <atomic>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -34,6 +36,11 @@ class SimNode {
   bool onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res);
   bool onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res);
   bool onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::ResetSim::Response& res);
+  /// Runs one motion: refused (`refused` says why) while another one runs; with motion_time_scale
+  /// > 0 it takes its modelled duration on the wall clock, during which odom carries its twist and
+  /// scanner/take_scan is refused.
+  MotionOutput runMotion(const std::function<MotionOutput()>& motion, double distance_m, double angle_rad,
+                         std::string* refused);
   void onClockTimer(const ros::WallTimerEvent&);
   /// Publishes /clock, odom, tf and ground truth for the current state.
   void publishState();
@@ -48,6 +55,8 @@ class SimNode {
 
   std::unique_ptr<Simulator> sim_;
   std::mutex mutex_;
+  std::atomic<bool> moving_{false};    ///< a rotate/forward motion is running
+  double motion_time_scale_ = 0.0;     ///< wall seconds per modelled second of motion (0: at once)
   bool publish_clock_ = false;
   bool odom_as_map_ = false;  ///< publish map -> odom as identity (no SLAM running)
   double clock_start_s_ = 1.0;

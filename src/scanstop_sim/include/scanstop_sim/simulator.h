@@ -25,10 +25,25 @@ struct SimConfig {
   double robot_radius_m = 0.26;        ///< collision disc (Pioneer 2 DX: 44.5 x 38 cm body, 0.26 m swept radius)
   double collision_step_m = 0.005;     ///< path sampling for collision checks [m]
   double max_forward_m = 5.0;          ///< longest forward command accepted [m]
+  double max_rotate_rad = 2.0 * M_PI;  ///< largest rotation command accepted [rad]
   bool outlier_filter = true;          ///< apply the thesis 3.4 filter to every scan, as the real driver does
   uint64_t seed = 1;
-  void validate() const;
+  /// Throws ConfigError naming sim_node's parameter; `profile_prefix` names the error profile's
+  /// parameters (e.g. "profiles/thesis/").
+  void validate(const std::string& profile_prefix = "") const;
 };
+
+/// Checks of the service requests, made before anything is applied. Each returns an empty string
+/// when the request is fine, otherwise what is wrong in words for the response's message.
+/// TakeScan.planes: one of 50, 100, 200, 400.
+std::string checkScanPlanes(long planes);
+/// Rotate.angle_rad: finite, |angle| <= max_rotate_rad.
+std::string checkRotation(double angle_rad, double max_rotate_rad);
+/// Forward.distance_m: finite, |distance| <= max_forward_m.
+std::string checkForward(double distance_m, double max_forward_m);
+/// A (re)start pose in the world frame: finite, yaw within [-2 pi, 2 pi], the robot disc inside the
+/// world's bounding box and not touching an obstacle.
+std::string checkStartPose(const Pose2D& pose_in_world, const World& world, double robot_radius_m);
 
 struct ScanOutput {
   PointCloud cloud;               ///< organized: height = planes, width = beams; base_link frame; NaN invalid
@@ -60,10 +75,12 @@ class Simulator {
   /// Takes a full 3D scan (planes in {50, 100, 200, 400} or any 1..2000). Throws std::invalid_argument.
   ScanOutput scan(int planes);
   /// Drives straight ahead by distance_m (true motion through the error model, stops at contact).
+  /// Throws std::invalid_argument (checkForward's message) and changes nothing for a bad distance.
   MotionOutput forward(double distance_m);
-  /// Turns on the spot by angle_rad.
+  /// Turns on the spot by angle_rad. Throws std::invalid_argument (checkRotation) for a bad angle.
   MotionOutput rotate(double angle_rad);
   /// Puts the robot at a new start pose; odometry and the map frame restart there. seed < 0 keeps the RNG.
+  /// Throws std::invalid_argument (checkStartPose's message) and changes nothing for a bad pose.
   void reset(const Pose2D& start_in_world, int64_t seed);
 
   const Pose2D& trueInWorld() const { return true_world_; }

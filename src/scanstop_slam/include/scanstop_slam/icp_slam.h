@@ -24,7 +24,25 @@ struct SlamConfig {
   double source_voxel_m = 0.02;   ///< scan points used for matching: one per voxel of this size (0 = all) [m]
   int max_points_per_voxel = 30;  ///< map points kept per c_max voxel (bounds memory and query time)
   double map_spacing_m = 0.0;     ///< a map point joins only if none of its voxel is closer [m] (0 = first come)
+  /// Request checks (registerScan refuses, changing nothing): a finite scan point farther than this
+  /// from base_link is not a measurement [m], [0.1, 10000]
+  double max_point_distance_m = 100.0;
+  /// Odometry moving farther than this between two scans is not a motion of the robot (a reset or
+  /// a corrupt pose) [m], [0.01, 100000]
+  double max_odom_jump_m = 20.0;
   void validate() const;
+};
+
+/// Why a scan (base_link frame, NaN = no return) cannot be registered, or "" when it can: no
+/// point, no finite point, an infinite coordinate (NaN marks invalid points, Inf is corrupt), or a
+/// point farther than max_point_distance_m from base_link. Names the first bad point's index.
+std::string scanProblem(const PointCloud& scan_base, double max_point_distance_m);
+
+/// A scan of the map directory that could not be loaded at start (skipped, the map goes on without it).
+struct SkippedScan {
+  uint32_t index = 0;
+  std::string file;    ///< path of the scan file
+  std::string reason;  ///< the loader's error
 };
 
 /// One registered scan.
@@ -43,12 +61,17 @@ struct Registration {
 
 class IcpSlam {
  public:
-  /// map_dir may be empty (nothing persisted); otherwise its scans are loaded (resume).
-  /// Throws IoError naming a corrupt file.
+  /// map_dir may be empty (nothing persisted); otherwise its scans are loaded (resume). A scan file
+  /// that cannot be read (missing, truncated, corrupt) is skipped and listed in skippedScans(); its
+  /// poses.csv entry stays, so indices and the trajectory are kept. Throws IoError naming poses.csv
+  /// when that is corrupt (scanstop_common's MapDirectory refuses it as a whole).
   IcpSlam(const SlamConfig& config, const std::string& map_dir = "");
 
   /// Registers a scan given in base_link (NaN points ignored) taken at odom_pose; sensor_origin
-  /// (scanner centre in base_link) and stamp are stored with it.
+  /// (scanner centre in base_link) and stamp are stored with it. Throws std::invalid_argument,
+  /// changing nothing, for a bad request: scanProblem(), a non-finite pose, sensor origin or stamp,
+  /// or an odometry jump beyond max_odom_jump_m since the last scan. Throws IoError (nothing changed
+  /// in memory) when the map directory cannot be written.
   Registration registerScan(const PointCloud& scan_base, const Pose2D& odom_pose,
                             const Eigen::Vector3d& sensor_origin = Eigen::Vector3d::Zero(), double stamp_s = 0.0);
 
@@ -60,6 +83,11 @@ class IcpSlam {
   Pose2D mapFromOdom() const { return last_map_ * last_odom_.inverse(); }
   /// The map directory (null when not persisting).
   const MapDirectory* mapDirectory() const { return dir_.get(); }
+  /// Scans of the map directory that could not be loaded at start.
+  const std::vector<SkippedScan>& skippedScans() const { return skipped_; }
+  /// Why a scan at odom_pose would be refused for its odometry (non-finite, or a jump beyond
+  /// max_odom_jump_m since the last scan), or "".
+  std::string odomProblem(const Pose2D& odom_pose) const;
 
  private:
   std::vector<Eigen::Vector3f> coarseSource(const std::vector<Eigen::Vector3f>& source) const;
@@ -68,6 +96,7 @@ class IcpSlam {
   std::unique_ptr<MapDirectory> dir_;
   size_t count_ = 0;
   Pose2D last_map_, last_odom_;
+  std::vector<SkippedScan> skipped_;
 };
 
 }  // namespace slam

@@ -4,6 +4,7 @@
 /// diagnostics and the reconnect timer.
 
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <scanstop_msgs/TakeScan.h>
 #include <tf2_ros/buffer.h>
@@ -15,6 +16,7 @@
 #include <string>
 
 #include "scanstop_urg/driver.h"
+#include "scanstop_urg/standstill.h"
 
 namespace scanstop {
 namespace urg {
@@ -22,6 +24,8 @@ namespace urg {
 /// Reads every parameter of the node (see README) into a DriverConfig; throws ConfigError naming
 /// the parameter that is wrong.
 DriverConfig readDriverConfig(const ros::NodeHandle& pnh);
+/// Reads standstill/max_linear_speed and standstill/max_angular_speed; throws ConfigError.
+StandstillConfig readStandstillConfig(const ros::NodeHandle& pnh);
 
 class UrgDriverNode {
  public:
@@ -31,6 +35,7 @@ class UrgDriverNode {
 
  private:
   bool onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res);
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg);
   void onReconnectTimer(const ros::WallTimerEvent&);
   void onDiagnosticsTimer(const ros::WallTimerEvent&);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
@@ -43,6 +48,12 @@ class UrgDriverNode {
   double odom_timeout_s_ = 0.5;
   bool require_odom_ = true;
   bool was_connected_ = false;
+  StandstillConfig standstill_;
+  std::mutex odom_mutex_;          ///< guards the three below
+  std::string base_motion_;        ///< why the base moves now (last odom twist); empty: standing still
+  bool scanning_ = false;
+  std::string moved_during_scan_;  ///< the first motion seen while scanning
+  ros::Subscriber odom_sub_;
   ros::ServiceServer take_scan_srv_;
   ros::Publisher scan_pub_, progress_pub_;
   tf2_ros::Buffer tf_buffer_;
