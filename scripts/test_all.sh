@@ -67,6 +67,12 @@ if bash scripts/check_loopback.sh > logs/check_loopback.log 2>&1; then lo_ok=1; 
 cat logs/check_loopback.log
 junit loopback_binding $lo_ok logs/check_loopback.log
 
+# A recorded mission replayed with replay.launch rebuilds the same map (mission acceptance, rosbag).
+echo "test: a recorded mission replayed with replay.launch (scripts/check_mission_replay.sh)"
+if bash scripts/check_mission_replay.sh "$root/logs/mission_replay" > logs/check_mission_replay.log 2>&1; then mr_ok=1; else mr_ok=0; fi
+tail -8 logs/check_mission_replay.log
+junit mission_bag_replay $mr_ok logs/check_mission_replay.log
+
 echo "test: catkin_make run_tests (log in logs/run_tests.log)"
 catkin_make -DCATKIN_ENABLE_TESTING=ON -j1 run_tests > logs/run_tests.log 2>&1
 run_rc=$?
