@@ -22,6 +22,7 @@ if [[ ${#worlds[@]} -eq 0 ]]; then worlds=(room_10x8 office_loop corridor turtle
 out="${SCANSTOP_BENCH_DIR:-$root/runs/bench-$(date +%Y%m%d-%H%M%S)}"
 mkdir -p "$out"
 export ROS_IP=127.0.0.1
+unset ROS_HOSTNAME  # it would take precedence over ROS_IP: keep every node on loopback
 for w in "${worlds[@]}"; do
   file="$root/worlds/$w.stl"
   if [[ "$w" == turtlebot3_house ]]; then file="$root/../shared/data/worlds/turtlebot3_house.stl"; fi

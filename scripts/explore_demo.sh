@@ -36,6 +36,7 @@ mkdir -p "$run_dir"
 # other ROS system running on this machine.
 port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 export ROS_IP=127.0.0.1 ROS_MASTER_URI="http://127.0.0.1:$port"
+unset ROS_HOSTNAME  # it would take precedence over ROS_IP: keep every node on loopback
 export ROS_LOG_DIR="$run_dir/ros_log"
 echo "explore_demo: exploring $world; run directory $run_dir (ROS logs in $ROS_LOG_DIR)"
 set +e
