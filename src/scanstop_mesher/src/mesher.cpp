@@ -34,6 +34,10 @@ std::vector<Eigen::Vector3d> toDouble(const std::vector<Eigen::Vector3f>& pts) {
 }  // namespace
 
 ScanPoints loadMapDirectory(const std::string& dir, std::vector<std::string>* skipped) {
+  // Reading must not create anything (MapDirectory would create a missing directory).
+  struct stat st;
+  if (::stat((dir + "/poses.csv").c_str(), &st) != 0)
+    throw IoError(dir + "/poses.csv", "does not exist (no scan in the map yet)");
   const MapDirectory map(dir);
   if (map.size() == 0) throw IoError(map.posesPath(), "the map has no scans");
   ScanPoints out;

@@ -140,6 +140,7 @@ class MesherBadInput(unittest.TestCase):
         self.assertFalse(os.path.exists('/etc/scanstop_mesh.ply'))
         self.assertFalse(os.path.exists(os.path.join(os.path.dirname(run), 'escape.ply')))
         self.assertEqual(os.listdir(self.outside), [])
+        self.assertFalse(os.path.exists(os.path.join(run, 'map')), 'a refused request created the map directory')
         self.assertEqual(self.markers, markers, 'a refused request published a mesh')
 
         # A relative path inside the run directory is fine.
