@@ -97,6 +97,13 @@ bool leadingIndex(const std::string& line, uint32_t& index) {
   return true;
 }
 
+/// The file append() writes for a scan index.
+std::string scanFileName(uint32_t index) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "scans/scan_%04u.pcd", index);
+  return name;
+}
+
 /// The scan files on disk named like the ones append() writes ("scan_NNNN.pcd"), sorted.
 std::vector<std::string> scanFilesOnDisk(const std::string& scans_dir) {
   std::vector<std::string> names;
@@ -173,6 +180,13 @@ void MapDirectory::load() {
                                       std::to_string(first_line[same - all.begin()]) + "; line skipped"});
       continue;
     }
+    const auto same_file = std::find_if(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == info.file; });
+    if (same_file != all.end()) {
+      problems_.push_back({poses, where + "file " + info.file + " already belongs to scan " +
+                                      std::to_string(same_file->index) + " (line " +
+                                      std::to_string(first_line[same_file - all.begin()]) + "); line skipped"});
+      continue;
+    }
     all.push_back(info);
     first_line.push_back(line_no);
   }
@@ -204,16 +218,21 @@ void MapDirectory::load() {
                         std::find(mentioned.begin(), mentioned.end(), "scans/" + name) != mentioned.end();
     if (!listed) problems_.push_back({dir_ + "/scans/" + name, "not listed in poses.csv (an interrupted append?); not loaded"});
   }
+  // The next scan's file must not be one a line names (a line may name another index's file).
   next_index_ = static_cast<uint32_t>(largest + 1);
+  const auto named = [&](uint32_t index) {
+    const std::string file = scanFileName(index);
+    return std::any_of(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == file; }) ||
+           std::find(mentioned.begin(), mentioned.end(), file) != mentioned.end();
+  };
+  while (named(next_index_)) ++next_index_;
 }
 
 void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
   if (info.index != next_index_)
     throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": the next index is " +
                                    std::to_string(next_index_) + " (" + std::to_string(scans_.size()) + " scans loaded)");
-  char name[32];
-  std::snprintf(name, sizeof(name), "scans/scan_%04u.pcd", info.index);
-  info.file = name;
+  info.file = scanFileName(info.index);
   writeCloud(dir_ + "/" + info.file, removeNonFinite(cloud_base));
   scans_.push_back(info);
   try {

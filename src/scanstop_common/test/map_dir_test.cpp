@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -228,6 +229,35 @@ TEST(MapDirectory, DuplicateIndexKeepsTheFirstLine) {
   expectOneProblem(map, poses, "line 4: scan index 0 already on line 2; line skipped");
   EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1}));
   EXPECT_DOUBLE_EQ(map.scans()[0].map_pose.x, 0.0);
+}
+
+// Found by map_dir_fuzzer: a line naming another index's file (1 -> scans/scan_0002.pcd, missing) made
+// append(2) write that file, and the skipped scan 1 came back on reopening as a copy of scan 2.
+TEST(MapDirectory, LineNamingAnotherScansFileIsNeverOverwritten) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  const std::string poses = dir + "/poses.csv";
+  replaceLine(poses, 3, "1,scans/scan_0002.pcd,40,1,2,1.5,1.1,2,1.5,0,0,0.5,0,7,90,0.02,0.8");
+  PointCloud cloud;
+  cloud.push_back({1, 1, 1});
+  {
+    MapDirectory map(dir);
+    ASSERT_EQ(map.problems().size(), 2u);
+    EXPECT_EQ(map.problems()[0].message(), dir + "/scans/scan_0002.pcd: no such file; scan 1 skipped");
+    EXPECT_NE(map.problems()[1].message().find("scan_0001.pcd: not listed in poses.csv"), std::string::npos);
+    EXPECT_EQ(map.nextIndex(), 3u);  // 2 would write scans/scan_0002.pcd, which line 3 names
+    map.append(info(3, Pose2D()), cloud);
+  }
+  const MapDirectory again(dir);
+  EXPECT_EQ(indices(again), (std::vector<uint32_t>{0, 3}));
+  // Two lines naming one file: the second is skipped.
+  std::ofstream(poses, std::ios::app) << "7,scans/scan_0000.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  const MapDirectory third(dir);
+  EXPECT_EQ(indices(third), (std::vector<uint32_t>{0, 3}));
+  const std::string expected = poses + ": line 5: file scans/scan_0000.pcd already belongs to scan 0 (line 2); line skipped";
+  EXPECT_TRUE(std::any_of(third.problems().begin(), third.problems().end(),
+                          [&](const MapProblem& p) { return p.message() == expected; }))
+      << third.problems().front().message();
 }
 
 TEST(MapDirectory, PosesCutMidLineKeepsTheCompleteLines) {

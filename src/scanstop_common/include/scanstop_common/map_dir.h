@@ -56,7 +56,8 @@ class MapDirectory {
   /// What was wrong with the directory when it was loaded (empty for a healthy map).
   const std::vector<MapProblem>& problems() const { return problems_; }
   /// The index the next appended scan must have: one past every index poses.csv mentions, also on
-  /// skipped lines and for skipped scans, so the file of a listed scan is never overwritten. Scan files
+  /// skipped lines and for skipped scans, and whose scans/scan_NNNN.pcd no line names, so the file of a
+  /// listed scan is never overwritten. Scan files
   /// that poses.csv does not list (an append interrupted before poses.csv was written) are reported and
   /// replaced by the scan that gets their index. Equals size() for a healthy map.
   uint32_t nextIndex() const { return next_index_; }
