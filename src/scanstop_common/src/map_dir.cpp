@@ -219,13 +219,14 @@ void MapDirectory::load() {
     if (!listed) problems_.push_back({dir_ + "/scans/" + name, "not listed in poses.csv (an interrupted append?); not loaded"});
   }
   // The next scan's file must not be one a line names (a line may name another index's file).
-  next_index_ = static_cast<uint32_t>(largest + 1);
-  const auto named = [&](uint32_t index) {
-    const std::string file = scanFileName(index);
-    return std::any_of(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == file; }) ||
-           std::find(mentioned.begin(), mentioned.end(), file) != mentioned.end();
-  };
-  while (named(next_index_)) ++next_index_;
+  for (const MapScanInfo& s : all) named_files_.push_back(s.file);
+  named_files_.insert(named_files_.end(), mentioned.begin(), mentioned.end());
+  setNextIndex(static_cast<uint32_t>(largest + 1));
+}
+
+void MapDirectory::setNextIndex(uint32_t candidate) {
+  next_index_ = candidate;
+  while (std::find(named_files_.begin(), named_files_.end(), scanFileName(next_index_)) != named_files_.end()) ++next_index_;
 }
 
 void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
@@ -241,7 +242,8 @@ void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
     scans_.pop_back();
     throw;
   }
-  next_index_ = info.index + 1;
+  named_files_.push_back(info.file);
+  setNextIndex(info.index + 1);
 }
 
 void MapDirectory::updateInfo(const MapScanInfo& info) {

@@ -248,6 +248,7 @@ TEST(MapDirectory, LineNamingAnotherScansFileIsNeverOverwritten) {
     EXPECT_EQ(map.nextIndex(), 3u);  // 2 would write scans/scan_0002.pcd, which line 3 names
     map.append(info(3, Pose2D()), cloud);
   }
+
   const MapDirectory again(dir);
   EXPECT_EQ(indices(again), (std::vector<uint32_t>{0, 3}));
   // Two lines naming one file: the second is skipped.
@@ -258,6 +259,20 @@ TEST(MapDirectory, LineNamingAnotherScansFileIsNeverOverwritten) {
   EXPECT_TRUE(std::any_of(third.problems().begin(), third.problems().end(),
                           [&](const MapProblem& p) { return p.message() == expected; }))
       << third.problems().front().message();
+}
+
+TEST(MapDirectory, NextIndexAfterAppendSkipsANamedFile) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  // Scan 2's line names scans/scan_0004.pcd (missing): 3 is free, 4 is not.
+  std::ofstream(dir + "/poses.csv", std::ios::app) << "2,scans/scan_0004.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  MapDirectory map(dir);
+  EXPECT_EQ(map.nextIndex(), 3u);
+  PointCloud cloud;
+  cloud.push_back({1, 1, 1});
+  map.append(info(3, Pose2D()), cloud);
+  EXPECT_EQ(map.nextIndex(), 5u);
+  EXPECT_EQ(MapDirectory(dir).nextIndex(), 5u);
 }
 
 TEST(MapDirectory, PosesCutMidLineKeepsTheCompleteLines) {

@@ -80,11 +80,13 @@ class MapDirectory {
 
  private:
   void load();
+  void setNextIndex(uint32_t candidate);
   void writePoses() const;
   std::string dir_;
   std::vector<MapScanInfo> scans_;
   std::vector<MapScanInfo> skipped_;  ///< parsed lines whose scan file was bad (kept in poses.csv)
   std::vector<MapProblem> problems_;
+  std::vector<std::string> named_files_;  ///< every scan file a line of poses.csv names
   uint32_t next_index_ = 0;
 };
 
