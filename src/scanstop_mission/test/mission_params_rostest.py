@@ -81,7 +81,7 @@ class MissionParams(unittest.TestCase):
     def test_control_requests_that_do_not_apply_are_refused(self):
         rospy.init_node("mission_params_test", anonymous=True, disable_signals=True)
         # No scanner runs: a started mission waits for scanner/take_scan meanwhile.
-        self.proc = self.node(["_autostart:=false", "_wait_for_service_timeout:=20.0", "_planes:=50"])
+        self.proc = self.node(["_autostart:=false", "_wait_for_service_timeout:=8.0", "_planes:=50"])
         r = self.call("pause")
         self.assertFalse(r.success)
         self.assertIn("no mission is running", r.message)
