@@ -1,7 +1,9 @@
 #include "scanstop_common/map_dir.h"
 
+#include <dirent.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
@@ -21,6 +24,7 @@ const char* const kHeader =
     "index,file,stamp_s,map_x,map_y,map_yaw,odom_x,odom_y,odom_yaw,sensor_x,sensor_y,sensor_z,"
     "converged,iterations,correspondences,rms_m,overlap";
 constexpr size_t kColumns = 17;
+constexpr double kMaxIndex = 9999999.0;  // scan_%04u names sort up to 7 digits
 
 /// Creates the directory and any missing parents (like mkdir -p).
 void makeDirectory(const std::string& path) {
@@ -44,11 +48,10 @@ std::vector<std::string> splitCsv(const std::string& line) {
   return out;
 }
 
-MapScanInfo parseLine(const std::string& line, const std::string& path, size_t line_no) {
+/// Parses one poses.csv line; throws std::invalid_argument saying what is wrong.
+MapScanInfo parseLine(const std::string& line) {
   const std::vector<std::string> f = splitCsv(line);
-  const auto fail = [&](const std::string& what) {
-    throw IoError(path, "line " + std::to_string(line_no) + ": " + what);
-  };
+  const auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
   if (f.size() != kColumns)
     fail("expected " + std::to_string(kColumns) + " comma-separated values, found " + std::to_string(f.size()));
   std::vector<double> v(kColumns, 0.0);
@@ -56,7 +59,16 @@ MapScanInfo parseLine(const std::string& line, const std::string& path, size_t l
     if (i == 1) continue;
     char* end = nullptr;
     v[i] = std::strtod(f[i].c_str(), &end);
-    if (f[i].empty() || *end != '\0' || !std::isfinite(v[i])) fail("column " + std::to_string(i + 1) + " ('" + f[i] + "') is not a finite number");
+    if (f[i].empty() || *end != '\0' || !std::isfinite(v[i]))
+      fail("column " + std::to_string(i + 1) + " ('" + f[i].substr(0, 40) + "') is not a finite number");
+  }
+  // Integer columns: index, converged (0/1), iterations, correspondences (a plain cast of a negative or
+  // huge double would be undefined behaviour).
+  for (size_t i : {size_t{0}, size_t{12}, size_t{13}, size_t{14}}) {
+    const double max = i == 0 ? kMaxIndex : i == 12 ? 1.0 : 4294967295.0;
+    if (v[i] < 0.0 || v[i] > max || v[i] != std::floor(v[i]))
+      fail("column " + std::to_string(i + 1) + " ('" + f[i].substr(0, 40) + "') is not an integer from 0 to " +
+           std::to_string(static_cast<uint64_t>(max)));
   }
   MapScanInfo info;
   info.index = static_cast<uint32_t>(v[0]);
@@ -70,9 +82,42 @@ MapScanInfo parseLine(const std::string& line, const std::string& path, size_t l
   info.correspondences = static_cast<uint32_t>(v[14]);
   info.rms_m = v[15];
   info.overlap = v[16];
-  if (info.file.empty() || info.file.find("..") != std::string::npos || info.file[0] == '/')
-    fail("scan file name '" + info.file + "' must be a relative path inside the map directory");
+  const bool control = std::any_of(info.file.begin(), info.file.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; });
+  if (info.file.empty() || info.file.find("..") != std::string::npos || info.file[0] == '/' || control)
+    fail("scan file name '" + info.file.substr(0, 40) + "' must be a relative path inside the map directory");
   return info;
+}
+
+/// The index in the first column of a line that does not parse, when it is one.
+bool leadingIndex(const std::string& line, uint32_t& index) {
+  const size_t comma = line.find(',');
+  const std::string first = line.substr(0, comma);
+  if (first.empty() || first.size() > 7 || first.find_first_not_of("0123456789") != std::string::npos) return false;
+  index = static_cast<uint32_t>(std::stoul(first));
+  return true;
+}
+
+/// The file append() writes for a scan index.
+std::string scanFileName(uint32_t index) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "scans/scan_%04u.pcd", index);
+  return name;
+}
+
+/// The scan files on disk named like the ones append() writes ("scan_NNNN.pcd"), sorted.
+std::vector<std::string> scanFilesOnDisk(const std::string& scans_dir) {
+  std::vector<std::string> names;
+  DIR* d = ::opendir(scans_dir.c_str());
+  if (!d) return names;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name.size() >= 13 && name.compare(0, 5, "scan_") == 0 && name.compare(name.size() - 4, 4, ".pcd") == 0 &&
+        name.find_first_not_of("0123456789", 5) == name.size() - 4)
+      names.push_back(name);
+  }
+  ::closedir(d);
+  std::sort(names.begin(), names.end());
+  return names;
 }
 
 std::string formatLine(const MapScanInfo& s) {
@@ -92,33 +137,103 @@ MapDirectory::MapDirectory(const std::string& dir) : dir_(dir) {
   if (dir_.empty()) throw IoError(dir, "empty map directory name");
   makeDirectory(dir_);
   makeDirectory(dir_ + "/scans");
-  std::ifstream in(posesPath());
-  if (!in) return;  // a new map
+  load();
+}
+
+void MapDirectory::load() {
+  const std::string poses = posesPath();
+  long largest = -1;  // the largest index poses.csv mentions, also on lines that are skipped
+  const auto note = [&largest](uint32_t index) { largest = std::max<long>(largest, index); };
+  std::vector<MapScanInfo> all;     // parsed lines, first of each index
+  std::vector<size_t> first_line;  // their line numbers
+  std::vector<std::string> mentioned;  // file column of skipped lines
+  struct stat st;
+  const bool exists = ::stat(poses.c_str(), &st) == 0 || errno != ENOENT;
+  if (exists && !S_ISREG(st.st_mode)) throw IoError(poses, "not a regular file");
+  const std::string text = exists ? readFile(poses) : std::string();  // IoError when it cannot be read
+  if (exists && text.empty()) problems_.push_back({poses, "empty file (no header line); no scans loaded"});
+  std::istringstream in(text);
   std::string line;
   size_t line_no = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line_no == 1) {
-      if (line != kHeader) throw IoError(posesPath(), "line 1: not a scanstop poses header");
+    if (line_no == 1 && line == kHeader) continue;
+    if (line.empty()) continue;
+    const std::string where = "line " + std::to_string(line_no) + ": ";
+    MapScanInfo info;
+    try {
+      info = parseLine(line);
+    } catch (const std::invalid_argument& e) {
+      uint32_t index = 0;
+      if (leadingIndex(line, index)) note(index);
+      const std::vector<std::string> columns = splitCsv(line);
+      if (columns.size() > 1) mentioned.push_back(columns[1]);
+      problems_.push_back({poses, where + (line_no == 1 ? "not the scanstop poses header" : e.what()) + "; line skipped"});
       continue;
     }
-    if (line.empty()) continue;
-    MapScanInfo info = parseLine(line, posesPath(), line_no);
-    if (info.index != scans_.size())
-      throw IoError(posesPath(), "line " + std::to_string(line_no) + ": scan index " + std::to_string(info.index) +
-                                     " where " + std::to_string(scans_.size()) + " was expected");
-    scans_.push_back(info);
+    if (line_no == 1) problems_.push_back({poses, "line 1: the header is missing; read as a scan line"});
+    note(info.index);
+    const auto same = std::find_if(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.index == info.index; });
+    if (same != all.end()) {
+      problems_.push_back({poses, where + "scan index " + std::to_string(info.index) + " already on line " +
+                                      std::to_string(first_line[same - all.begin()]) + "; line skipped"});
+      continue;
+    }
+    const auto same_file = std::find_if(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == info.file; });
+    if (same_file != all.end()) {
+      problems_.push_back({poses, where + "file " + info.file + " already belongs to scan " +
+                                      std::to_string(same_file->index) + " (line " +
+                                      std::to_string(first_line[same_file - all.begin()]) + "); line skipped"});
+      continue;
+    }
+    all.push_back(info);
+    first_line.push_back(line_no);
   }
+  std::stable_sort(all.begin(), all.end(), [](const MapScanInfo& a, const MapScanInfo& b) { return a.index < b.index; });
+  for (const MapScanInfo& info : all) {
+    const std::string path = dir_ + "/" + info.file;
+    std::string problem;
+    if (fileExtension(path) == "pcd") {
+      problem = pcdFileProblem(path);
+    } else {
+      try {
+        readCloud(path);
+      } catch (const IoError& e) {
+        problem = e.problem();
+      }
+    }
+    if (problem.empty()) {
+      scans_.push_back(info);
+    } else {
+      problems_.push_back({path, problem + "; scan " + std::to_string(info.index) + " skipped"});
+      skipped_.push_back(info);
+    }
+  }
+  // Scan files no line of poses.csv names: an append interrupted between the scan file and poses.csv
+  // (or a line lost when a corrupt poses.csv was repaired).
+  // They hold no pose; the scan with that index, when it comes, replaces them.
+  for (const std::string& name : scanFilesOnDisk(dir_ + "/scans")) {
+    const bool listed = std::any_of(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == "scans/" + name; }) ||
+                        std::find(mentioned.begin(), mentioned.end(), "scans/" + name) != mentioned.end();
+    if (!listed) problems_.push_back({dir_ + "/scans/" + name, "not listed in poses.csv (an interrupted append?); not loaded"});
+  }
+  // The next scan's file must not be one a line names (a line may name another index's file).
+  for (const MapScanInfo& s : all) named_files_.push_back(s.file);
+  named_files_.insert(named_files_.end(), mentioned.begin(), mentioned.end());
+  setNextIndex(static_cast<uint32_t>(largest + 1));
+}
+
+void MapDirectory::setNextIndex(uint32_t candidate) {
+  next_index_ = candidate;
+  while (std::find(named_files_.begin(), named_files_.end(), scanFileName(next_index_)) != named_files_.end()) ++next_index_;
 }
 
 void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
-  if (info.index != scans_.size())
-    throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": the map has " +
-                                   std::to_string(scans_.size()) + " scans");
-  char name[32];
-  std::snprintf(name, sizeof(name), "scans/scan_%04u.pcd", info.index);
-  info.file = name;
+  if (info.index != next_index_)
+    throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": the next index is " +
+                                   std::to_string(next_index_) + " (" + std::to_string(scans_.size()) + " scans loaded)");
+  info.file = scanFileName(info.index);
   writeCloud(dir_ + "/" + info.file, removeNonFinite(cloud_base));
   scans_.push_back(info);
   try {
@@ -127,18 +242,21 @@ void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
     scans_.pop_back();
     throw;
   }
+  named_files_.push_back(info.file);
+  setNextIndex(info.index + 1);
 }
 
 void MapDirectory::updateInfo(const MapScanInfo& info) {
-  if (info.index >= scans_.size())
+  const auto it = std::find_if(scans_.begin(), scans_.end(), [&](const MapScanInfo& s) { return s.index == info.index; });
+  if (it == scans_.end())
     throw IoError(posesPath(), "cannot update scan " + std::to_string(info.index) + ": no such scan");
-  const MapScanInfo old = scans_[info.index];
-  scans_[info.index] = info;
-  scans_[info.index].file = old.file;
+  const MapScanInfo old = *it;
+  *it = info;
+  it->file = old.file;
   try {
     writePoses();
   } catch (...) {
-    scans_[info.index] = old;
+    *it = old;
     throw;
   }
 }
@@ -153,8 +271,11 @@ PointCloud MapDirectory::loadScanInMap(size_t i) const {
 }
 
 void MapDirectory::writePoses() const {
+  std::vector<MapScanInfo> all = scans_;
+  all.insert(all.end(), skipped_.begin(), skipped_.end());
+  std::sort(all.begin(), all.end(), [](const MapScanInfo& a, const MapScanInfo& b) { return a.index < b.index; });
   std::string out = std::string(kHeader) + "\n";
-  for (const MapScanInfo& s : scans_) out += formatLine(s) + "\n";
+  for (const MapScanInfo& s : all) out += formatLine(s) + "\n";
   writeFileAtomic(posesPath(), out);
 }
 

@@ -1,57 +1,240 @@
 // PCD files through PCL; the only translation unit of scanstop_common that includes PCL.
 #include <pcl/PCLPointCloud2.h>
-#include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
 
 namespace scanstop {
 namespace {
 
-bool hasField(const pcl::PCLPointCloud2& blob, const std::string& name) {
-  for (const auto& f : blob.fields)
-    if (f.name == name) return true;
-  return false;
+/// What the header says, checked for consistency with itself and with the file size.
+struct PcdHeader {
+  std::vector<std::string> fields;
+  std::vector<int> sizes;
+  std::vector<char> types;
+  std::vector<uint64_t> counts;
+  uint64_t width = 0, height = 0, points = 0;
+  std::string data;     ///< ascii, binary or binary_compressed
+  uint64_t data_offset = 0;  ///< first byte after the DATA line
+  uint64_t point_step = 0;   ///< bytes per point
+};
+
+bool parseUnsigned(const std::string& word, uint64_t max, uint64_t& out) {
+  if (word.empty() || word.size() > 20) return false;
+  for (char c : word)
+    if (c < '0' || c > '9') return false;
+  errno = 0;
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(word.c_str(), &end, 10);
+  if (errno != 0 || *end != '\0' || v > max) return false;
+  out = v;
+  return true;
 }
 
-/// Checks the text header before PCL sees the file (PCL's reader crashes on some garbage).
-void checkPcdHeader(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+/// Parses and checks the header of the PCD file at path (size bytes long). Every problem is an IoError
+/// naming the file: PCL's own reader trusts the header (a binary_compressed file without SIZE lines
+/// made it overflow a heap buffer, see cloud_io_test PcdFuzzFindings).
+PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path) {
+  const auto fail = [&path](const std::string& what) { throw IoError(path, "not a valid PCD file: " + what); };
+  // The header entries in the order the PCD format prescribes; COUNT, VIEWPOINT and POINTS are optional.
+  static const char* const kOrder[] = {"VERSION", "FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  constexpr uint64_t kMaxFields = 4096, kMaxCount = 1u << 20, kMaxDim = 0xFFFFFFFFu;
+  PcdHeader h;
+  int last = -1;
+  bool seen[10] = {};
   std::string line;
-  bool fields = false, points = false;
-  int lines = 0;
-  while (std::getline(in, line) && lines++ < 64) {
-    if (line.empty() || line[0] == '#') continue;
-    const std::string key = line.substr(0, line.find(' '));
-    if (key == "FIELDS" || key == "COLUMNS") fields = true;
-    else if (key == "POINTS" || key == "WIDTH") points = true;
-    else if (key == "DATA") {
-      if (!fields || !points) break;
-      return;
-    } else if (key != "VERSION" && key != "SIZE" && key != "TYPE" && key != "COUNT" && key != "HEIGHT" &&
-               key != "VIEWPOINT") {
-      throw IoError(path, "not a valid PCD file: unexpected header line '" + line.substr(0, 40) + "'");
+  size_t line_no = 0;
+  uint64_t offset = 0;
+  while (h.data.empty()) {
+    if (!std::getline(in, line)) fail(line_no == 0 ? "no header" : "the header ends without a DATA line");
+    ++line_no;
+    offset += line.size() + 1;
+    if (offset > (1u << 20)) fail("header longer than 1 MiB");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string key;
+    if (!(words >> key) || key[0] == '#') continue;
+    if (key == "COLUMNS") key = "FIELDS";
+    int k = 0;
+    while (k < 10 && key != kOrder[k]) ++k;
+    const std::string where = "line " + std::to_string(line_no) + " (" + key.substr(0, 20) + "): ";
+    if (k == 10) fail(where + "unknown header entry");
+    if (k <= last) fail(where + "repeated or out of order (the order is VERSION FIELDS SIZE TYPE COUNT WIDTH HEIGHT VIEWPOINT POINTS DATA)");
+    if (k > 1 && last < 1) fail(where + "comes before FIELDS");
+    last = k;
+    seen[k] = true;
+    std::vector<std::string> v;
+    for (std::string w; words >> w;) v.push_back(w);
+    const auto perField = [&](const char* what) {
+      if (v.size() != h.fields.size())
+        fail(where + std::to_string(v.size()) + " " + what + " for " + std::to_string(h.fields.size()) + " fields");
+    };
+    if (key == "VERSION") {
+      continue;
+    } else if (key == "FIELDS") {
+      if (v.empty() || v.size() > kMaxFields) fail(where + "needs 1 to " + std::to_string(kMaxFields) + " field names");
+      h.fields = v;
+    } else if (key == "SIZE") {
+      perField("sizes");
+      for (const auto& w : v) {
+        if (w != "1" && w != "2" && w != "4" && w != "8") fail(where + "size '" + w.substr(0, 20) + "' is not 1, 2, 4 or 8");
+        h.sizes.push_back(w[0] - '0');
+      }
+    } else if (key == "TYPE") {
+      if (!seen[2]) fail(where + "comes before SIZE");
+      perField("types");
+      for (size_t i = 0; i < v.size(); ++i) {
+        if (v[i] != "I" && v[i] != "U" && v[i] != "F") fail(where + "type '" + v[i].substr(0, 20) + "' is not I, U or F");
+        if (v[i] == "F" && h.sizes[i] != 4 && h.sizes[i] != 8)
+          fail(where + "field '" + h.fields[i] + "' is a float of " + std::to_string(h.sizes[i]) + " bytes");
+        h.types.push_back(v[i][0]);
+      }
+    } else if (key == "COUNT") {
+      perField("counts");
+      for (const auto& w : v) {
+        uint64_t c = 0;
+        if (!parseUnsigned(w, kMaxCount, c) || c == 0) fail(where + "count '" + w.substr(0, 20) + "' is not 1 to " + std::to_string(kMaxCount));
+        h.counts.push_back(c);
+      }
+    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+      uint64_t n = 0;
+      if (v.size() != 1 || !parseUnsigned(v[0], kMaxDim, n)) fail(where + "needs one integer from 0 to " + std::to_string(kMaxDim));
+      (key == "WIDTH" ? h.width : key == "HEIGHT" ? h.height : h.points) = n;
+    } else if (key == "VIEWPOINT") {
+      if (v.size() != 7) fail(where + "needs 7 numbers (tx ty tz qw qx qy qz)");
+      for (const auto& w : v) {
+        char* end = nullptr;
+        std::strtod(w.c_str(), &end);
+        if (end == w.c_str() || *end != '\0') fail(where + "'" + w.substr(0, 20) + "' is not a number");
+      }
+    } else if (key == "DATA") {
+      if (v.size() != 1 || (v[0] != "ascii" && v[0] != "binary" && v[0] != "binary_compressed"))
+        fail(where + "needs ascii, binary or binary_compressed");
+      h.data = v[0];
     }
   }
-  throw IoError(path, "not a valid PCD file: header lacks FIELDS, WIDTH/POINTS or DATA");
+  if (!seen[2] || !seen[3]) fail("the header lacks SIZE or TYPE");
+  if (!seen[5] || !seen[6]) fail("the header lacks WIDTH or HEIGHT");
+  if (h.counts.empty()) h.counts.assign(h.fields.size(), 1);
+  if (h.width * h.height > kMaxDim) fail("WIDTH x HEIGHT exceeds " + std::to_string(kMaxDim) + " points");
+  if (!seen[8]) fail("the header lacks POINTS");
+  if (h.points != h.width * h.height)
+    fail("WIDTH x HEIGHT = " + std::to_string(h.width) + " x " + std::to_string(h.height) + " but POINTS " + std::to_string(h.points));
+  for (size_t i = 0; i < h.fields.size(); ++i) h.point_step += h.sizes[i] * h.counts[i];
+  h.data_offset = offset;
+  const uint64_t body = size > offset ? size - offset : 0;
+  if (h.data == "binary") {
+    const uint64_t need = h.points * h.point_step;  // < 2^32 * 2^35: no overflow
+    if (body < need)
+      throw IoError(path, "truncated PCD: " + std::to_string(h.points) + " points need " + std::to_string(need) +
+                              " data bytes, the file has " + std::to_string(body));
+  } else if (h.data == "binary_compressed") {
+    if (h.points == 0) return h;
+    if (body < 8) throw IoError(path, "truncated PCD: the compressed data lacks its size fields");
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(offset));
+    uint32_t sizes[2] = {0, 0};
+    in.read(reinterpret_cast<char*>(sizes), 8);
+    if (!in) throw IoError(path, "truncated PCD: the compressed data lacks its size fields");
+    if (sizes[1] != h.points * h.point_step)
+      fail("the compressed data unpacks to " + std::to_string(sizes[1]) + " bytes, " + std::to_string(h.points) +
+           " points need " + std::to_string(h.points * h.point_step));
+    if (sizes[0] > body - 8)
+      throw IoError(path, "truncated PCD: " + std::to_string(sizes[0]) + " compressed bytes announced, the file has " +
+                              std::to_string(body - 8));
+    // LZF expands at most ~90-fold (a 3-byte back reference yields 264 bytes).
+    if (sizes[1] > 100ull * sizes[0] + 64) fail("the compressed data cannot unpack to the announced size");
+  } else if (h.points * std::accumulate(h.counts.begin(), h.counts.end(), uint64_t{0}) > (body + 1) / 2) {
+    // ASCII: every value takes at least one character and a separator (bounds PCL's up-front allocation).
+    throw IoError(path, "truncated PCD: " + std::to_string(h.points) + " points announced, the file has only " +
+                            std::to_string(body) + " data bytes");
+  }
+  return h;
+}
+
+PcdHeader checkPcdFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path, errno == ENOENT ? "no such file" : std::string("cannot open: ") + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size <= 0) throw IoError(path, "empty file");
+  in.seekg(0);
+  return readPcdHeader(in, static_cast<uint64_t>(size), path);
+}
+
+const pcl::PCLPointField* findField(const pcl::PCLPointCloud2& blob, const std::string& name) {
+  for (const auto& f : blob.fields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+/// One value of a field as a float, whatever its stored type.
+float fieldValue(const uint8_t* p, uint8_t type) {
+  switch (type) {
+    case pcl::PCLPointField::INT8: { int8_t v; std::memcpy(&v, p, 1); return v; }
+    case pcl::PCLPointField::UINT8: return *p;
+    case pcl::PCLPointField::INT16: { int16_t v; std::memcpy(&v, p, 2); return v; }
+    case pcl::PCLPointField::UINT16: { uint16_t v; std::memcpy(&v, p, 2); return v; }
+    case pcl::PCLPointField::INT32: { int32_t v; std::memcpy(&v, p, 4); return static_cast<float>(v); }
+    case pcl::PCLPointField::UINT32: { uint32_t v; std::memcpy(&v, p, 4); return static_cast<float>(v); }
+    case pcl::PCLPointField::INT64: { int64_t v; std::memcpy(&v, p, 8); return static_cast<float>(v); }
+    case pcl::PCLPointField::UINT64: { uint64_t v; std::memcpy(&v, p, 8); return static_cast<float>(v); }
+    case pcl::PCLPointField::FLOAT32: { float v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::FLOAT64: {
+      double v;
+      std::memcpy(&v, p, 8);
+      // Out-of-range doubles become infinities (a plain cast would be undefined).
+      return std::fabs(v) > std::numeric_limits<float>::max() ? (v > 0 ? INFINITY : -INFINITY) : static_cast<float>(v);
+    }
+    default: return NAN;
+  }
+}
+
+size_t fieldBytes(uint8_t type) {
+  switch (type) {
+    case pcl::PCLPointField::INT8: case pcl::PCLPointField::UINT8: return 1;
+    case pcl::PCLPointField::INT16: case pcl::PCLPointField::UINT16: return 2;
+    case pcl::PCLPointField::INT32: case pcl::PCLPointField::UINT32: case pcl::PCLPointField::FLOAT32: return 4;
+    case pcl::PCLPointField::INT64: case pcl::PCLPointField::UINT64: case pcl::PCLPointField::FLOAT64: return 8;
+    default: return 0;
+  }
 }
 
 }  // namespace
 
-PointCloud readPcd(const std::string& path) {
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe) throw IoError(path, "no such file");
-    if (probe.peek() == std::ifstream::traits_type::eof()) throw IoError(path, "empty file");
+std::string pcdFileProblem(const std::string& path) {
+  try {
+    checkPcdFile(path);
+  } catch (const IoError& e) {
+    return e.problem();
   }
-  checkPcdHeader(path);
+  return {};
+}
+
+PointCloud readPcd(const std::string& path) {
+  const PcdHeader header = checkPcdFile(path);
+  PointCloud cloud;
+  if (header.points == 0) {
+    cloud.setUnorganized();
+    return cloud;
+  }
   pcl::PCLPointCloud2 blob;
   pcl::PCDReader reader;
   Eigen::Vector4f origin;
@@ -63,45 +246,46 @@ PointCloud readPcd(const std::string& path) {
   } catch (const std::exception& e) {
     throw IoError(path, std::string("not a valid PCD file: ") + e.what());
   }
-  if (status < 0)
-    throw IoError(path, "not a valid PCD file (PCL could not parse its header or data)");
-  if (!hasField(blob, "x") || !hasField(blob, "y") || !hasField(blob, "z"))
-    throw IoError(path, "PCD file lacks x, y or z fields");
-  PointCloud cloud;
-  const bool normals = hasField(blob, "normal_x") && hasField(blob, "normal_y") && hasField(blob, "normal_z");
-  const bool range = hasField(blob, "range");
-  if (normals) {
-    pcl::PointCloud<pcl::PointNormal> pc;
-    pcl::fromPCLPointCloud2(blob, pc);
-    cloud.points.reserve(pc.size());
-    cloud.normals.reserve(pc.size());
-    for (const auto& p : pc.points) {
-      cloud.points.emplace_back(p.x, p.y, p.z);
-      cloud.normals.emplace_back(p.normal_x, p.normal_y, p.normal_z);
-    }
-  } else if (range) {
-    pcl::PointCloud<pcl::PointWithRange> pc;
-    pcl::fromPCLPointCloud2(blob, pc);
-    cloud.points.reserve(pc.size());
-    cloud.ranges.reserve(pc.size());
-    for (const auto& p : pc.points) {
-      cloud.points.emplace_back(p.x, p.y, p.z);
-      cloud.ranges.push_back(p.range);
-    }
-  } else {
-    pcl::PointCloud<pcl::PointXYZ> pc;
-    pcl::fromPCLPointCloud2(blob, pc);
-    cloud.points.reserve(pc.size());
-    for (const auto& p : pc.points) cloud.points.emplace_back(p.x, p.y, p.z);
+  if (status < 0) throw IoError(path, "not a valid PCD file (PCL could not parse its header or data)");
+  const size_t n = static_cast<size_t>(blob.width) * blob.height;
+  if (blob.point_step == 0 || blob.data.size() < n * blob.point_step)
+    throw IoError(path, "not a valid PCD file: PCL returned " + std::to_string(blob.data.size()) + " data bytes for " +
+                            std::to_string(n) + " points of " + std::to_string(blob.point_step) + " bytes");
+  const auto field = [&](const std::string& name) -> const pcl::PCLPointField* {
+    const pcl::PCLPointField* f = findField(blob, name);
+    if (f && (fieldBytes(f->datatype) == 0 || f->offset + fieldBytes(f->datatype) > blob.point_step))
+      throw IoError(path, "not a valid PCD file: field '" + name + "' does not fit in a point");
+    return f;
+  };
+  const pcl::PCLPointField* fx = field("x");
+  const pcl::PCLPointField* fy = field("y");
+  const pcl::PCLPointField* fz = field("z");
+  if (!fx || !fy || !fz) throw IoError(path, "PCD file lacks x, y or z fields");
+  const pcl::PCLPointField* fnx = field("normal_x");
+  const pcl::PCLPointField* fny = field("normal_y");
+  const pcl::PCLPointField* fnz = field("normal_z");
+  const bool normals = fnx && fny && fnz;
+  const pcl::PCLPointField* frange = normals ? nullptr : field("range");
+  cloud.points.resize(n);
+  if (normals) cloud.normals.resize(n);
+  if (frange) cloud.ranges.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* p = blob.data.data() + i * blob.point_step;
+    cloud.points[i] = Eigen::Vector3f(fieldValue(p + fx->offset, fx->datatype), fieldValue(p + fy->offset, fy->datatype),
+                                      fieldValue(p + fz->offset, fz->datatype));
+    if (normals)
+      cloud.normals[i] = Eigen::Vector3f(fieldValue(p + fnx->offset, fnx->datatype),
+                                         fieldValue(p + fny->offset, fny->datatype),
+                                         fieldValue(p + fnz->offset, fnz->datatype));
+    if (frange) cloud.ranges[i] = fieldValue(p + frange->offset, frange->datatype);
   }
   cloud.width = blob.width;
   cloud.height = blob.height;
-  if (static_cast<size_t>(cloud.width) * cloud.height != cloud.points.size()) cloud.setUnorganized();
   return cloud;
 }
 
 void writePcd(const std::string& path, const PointCloud& cloud) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const std::string tmp = temporaryPathFor(path);
   int result = 0;
   const auto fill = [&cloud](auto& pc) {
     pc.width = cloud.width;
@@ -141,15 +325,8 @@ void writePcd(const std::string& path, const PointCloud& cloud) {
     std::remove(tmp.c_str());
     throw IoError(path, "could not write PCD file");
   }
-  // PCL's writer does not fsync; flush the data before the rename makes it visible.
-  if (FILE* f = std::fopen(tmp.c_str(), "rb+")) {
-    ::fsync(fileno(f));
-    std::fclose(f);
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw IoError(path, "cannot rename temporary file into place");
-  }
+  // PCL's writer does not fsync: commitTemporaryFile flushes before the rename makes the file visible.
+  commitTemporaryFile(tmp, path);
 }
 
 }  // namespace scanstop

@@ -111,6 +111,8 @@ class PlyBody {
   const std::string& name_;
 };
 
+}  // namespace
+
 TriangleMesh parsePly(const std::string& data, const std::string& name) {
   if (data.empty()) throw IoError(name, "empty file");
   if (data.compare(0, 3, "ply") != 0) throw IoError(name, "not a PLY file: it does not start with 'ply'");
@@ -219,8 +221,8 @@ TriangleMesh parsePly(const std::string& data, const std::string& name) {
   return mesh;
 }
 
+namespace {
 void putFloat(std::string& out, float f) { out.append(reinterpret_cast<const char*>(&f), 4); }
-
 }  // namespace
 
 TriangleMesh readPly(const std::string& path) { return parsePly(readFile(path), path); }
@@ -275,8 +277,9 @@ void writePlyCloud(const std::string& path, const PointCloud& cloud, bool binary
   writePly(path, mesh, binary);
 }
 
-PointCloud readXyz(const std::string& path) {
-  const std::string data = readFile(path);
+PointCloud readXyz(const std::string& path) { return parseXyz(readFile(path), path); }
+
+PointCloud parseXyz(const std::string& data, const std::string& path) {
   std::istringstream in(data);
   std::string line;
   PointCloud cloud;

@@ -1,11 +1,15 @@
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <initializer_list>
 #include <limits>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/shared_data.h"
+#include "scanstop_common/stl_io.h"
 #include "test_util.h"
 
 namespace scanstop {
@@ -133,6 +137,128 @@ TEST(CloudIo, AtomicWriteLeavesNoTemporaryFiles) {
   writeFileAtomic(dir.file("f.txt"), "two");
   EXPECT_EQ(readFile(dir.file("f.txt")), "two");
   EXPECT_THROW(writeFileAtomic("/nonexistent/dir/f.txt", "x"), IoError);
+}
+
+std::string bytes(std::initializer_list<int> b) {
+  std::string s;
+  for (int c : b) s.push_back(static_cast<char>(c));
+  return s;
+}
+std::string f32(float v) { return std::string(reinterpret_cast<const char*>(&v), 4); }
+std::string f64(double v) { return std::string(reinterpret_cast<const char*>(&v), 8); }
+std::string le32(uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); }
+
+// Inputs the libFuzzer target pcd_fuzzer found (test/fuzz/pcd_fuzz.cpp); each crashed before the fix.
+TEST(CloudIo, PcdFuzzFindings) {
+  TempDir dir;
+  // 1. PCL 1.13's PCDReader::readBodyBinary overflowed a 12-byte heap buffer (ASan heap-buffer-overflow
+  //    in memcpy) on a binary_compressed file whose header has no SIZE/TYPE lines and a garbled FIELDS
+  //    line. Our header check now rejects it before PCL sees it.
+  const std::string overflow = dir.write(
+      "overflow.pcd", std::string("VERSION 0.7\nFIELDS x y zIELDS x y ") + bytes({0x10, 0x00}) +
+                          "TYPE1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA binary_compressed\n" +
+                          bytes({0x0d, 0, 0, 0, 0x0c, 0, 0, 0, 0x0b, 0, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}));
+  expectIoError([&] { readPcd(overflow); }, overflow, "the header lacks SIZE or TYPE");
+  // 2. Our own header check (first version) read the SIZE list for a TYPE line when SIZE was missing
+  //    (UBSan: reference binding to null pointer in std::vector::operator[]).
+  const std::string type_first = dir.write(
+      "type_first.pcd", std::string("VERSION 0.7\nFIELDS 4 4\nTYPE F Fary_compressed\n") +
+                            bytes({0x0d, 0, 0, 0, 0x0c, 0, 0, 'T', 'H', ' ', '2', '\n', 'H', 'P', 'E', ' ', 'F', ' ',
+                                   'F', 'a', 0, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}));
+  expectIoError([&] { readPcd(type_first); }, type_first, "comes before SIZE");
+}
+
+// The header check in front of PCL: every inconsistency is an IoError naming the file and the problem.
+TEST(CloudIo, PcdHeaderIsCheckedBeforePcl) {
+  TempDir dir;
+  const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+  const auto pcd = [&](const std::string& name, const std::string& text) { return dir.write(name, text); };
+  const std::string p1 = pcd("huge_ascii.pcd", head + "WIDTH 1000000000\nHEIGHT 1\nPOINTS 1000000000\nDATA ascii\n1 2 3\n");
+  expectIoError([&] { readPcd(p1); }, p1, "truncated PCD: 1000000000 points announced");
+  const std::string p2 = pcd("mismatch.pcd", head + "WIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n1 2 3\n1 2 3\n1 2 3\n");
+  expectIoError([&] { readPcd(p2); }, p2, "WIDTH x HEIGHT = 2 x 2 but POINTS 3");
+  const std::string p3 = pcd("size3.pcd", "FIELDS x y z\nSIZE 4 3 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  expectIoError([&] { readPcd(p3); }, p3, "size '3' is not 1, 2, 4 or 8");
+  const std::string p4 = pcd("order.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nHEIGHT 1\nWIDTH 1\nDATA ascii\n1 2 3\n");
+  expectIoError([&] { readPcd(p4); }, p4, "line 5 (WIDTH): repeated or out of order");
+  const std::string p5 = pcd("types.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  expectIoError([&] { readPcd(p5); }, p5, "2 types for 3 fields");
+  const std::string p6 = pcd("nodata.pcd", head + "WIDTH 1\nHEIGHT 1\n");
+  expectIoError([&] { readPcd(p6); }, p6, "without a DATA line");
+  const std::string p7 = pcd("float2.pcd", "FIELDS x y z\nSIZE 4 4 2\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  expectIoError([&] { readPcd(p7); }, p7, "field 'z' is a float of 2 bytes");
+  // Compressed: the unpacked size must match the points, the packed bytes must be there.
+  const std::string raw = f32(1) + f32(2) + f32(3);
+  const std::string lzf = std::string(1, 11) + raw;  // one literal run of 12 bytes
+  const std::string chead = head + "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary_compressed\n";
+  const std::string good = pcd("c.pcd", chead + le32(13) + le32(12) + lzf);
+  const PointCloud c = readPcd(good);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c.points[0], Eigen::Vector3f(1, 2, 3));
+  const std::string c2 = pcd("c2.pcd", chead + le32(13) + le32(4000000) + lzf);
+  expectIoError([&] { readPcd(c2); }, c2, "unpacks to 4000000 bytes, 1 points need 12");
+  const std::string c3 = pcd("c3.pcd", chead + le32(100) + le32(12) + lzf);
+  expectIoError([&] { readPcd(c3); }, c3, "truncated PCD: 100 compressed bytes announced");
+  const std::string c4 = pcd("c4.pcd", chead + le32(13));
+  expectIoError([&] { readPcd(c4); }, c4, "lacks its size fields");
+  // Binary: a data section cut short.
+  const std::string b = pcd("b.pcd", head + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n" + raw + f32(4));
+  expectIoError([&] { readPcd(b); }, b, "truncated PCD: 2 points need 24 data bytes, the file has 16");
+  EXPECT_EQ(pcdFileProblem(good), "");
+  EXPECT_NE(pcdFileProblem(b).find("truncated PCD"), std::string::npos);
+}
+
+// Field types other than float32 are converted (PCL's fromPCLPointCloud2 silently left such points at 0).
+TEST(CloudIo, PcdWithDoubleAndIntegerFields) {
+  TempDir dir;
+  const std::string p = dir.write("d.pcd", "FIELDS x y z range\nSIZE 8 8 8 2\nTYPE F F F U\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary\n" +
+                                               f64(1.5) + f64(-2.25) + f64(1e300) + bytes({7, 1}));
+  const PointCloud c = readPcd(p);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c.points[0].x(), 1.5f);
+  EXPECT_EQ(c.points[0].y(), -2.25f);
+  EXPECT_TRUE(std::isinf(c.points[0].z()));  // out of float range: infinite, not undefined
+  ASSERT_TRUE(c.hasRanges());
+  EXPECT_EQ(c.ranges[0], 263.0f);
+  const std::string empty = dir.write("e.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA binary\n");
+  EXPECT_EQ(readPcd(empty).size(), 0u);
+  const std::string nopoints = dir.write("n.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  expectIoError([&] { readPcd(nopoints); }, nopoints, "the header lacks POINTS");
+}
+
+// Every writer is atomic: a temporary file in the same directory, fsync, rename; none is left behind,
+// and a failed write leaves the old file untouched.
+TEST(CloudIo, EveryWriterIsAtomic) {
+  TempDir dir;
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.faces = {{0, 1, 2}};
+  PointCloud cloud;
+  cloud.push_back({1, 2, 3});
+  writeCloud(dir.file("c.pcd"), cloud);
+  writeCloud(dir.file("c.ply"), cloud);
+  writeCloud(dir.file("c.xyz"), cloud);
+  writeMesh(dir.file("m.stl"), mesh);
+  writeMesh(dir.file("m.ply"), mesh);
+  writeStlAscii(dir.file("a.stl"), mesh);
+  const std::string listing = dir.file("listing");
+  ASSERT_EQ(std::system(("ls -a " + dir.file("") + " > " + listing).c_str()), 0);
+  const std::string names = readFile(listing);
+  EXPECT_EQ(names.find(".tmp"), std::string::npos) << names;
+  // An empty cloud (a scan with no finite point) is a valid PCD of no points.
+  writeCloud(dir.file("empty.pcd"), PointCloud());
+  EXPECT_EQ(readCloud(dir.file("empty.pcd")).size(), 0u);
+  // A failed rename (the target is a directory) removes the temporary file, in every format.
+  for (const char* name : {"d.pcd", "d.ply", "d.xyz"}) {
+    ASSERT_EQ(::mkdir(dir.file(name).c_str(), 0755), 0);
+    expectIoError([&] { writeCloud(dir.file(name), cloud); }, dir.file(name), "cannot rename temporary file into place");
+  }
+  ASSERT_EQ(::mkdir(dir.file("d.stl").c_str(), 0755), 0);
+  expectIoError([&] { writeMesh(dir.file("d.stl"), mesh); }, dir.file("d.stl"), "cannot rename");
+  ASSERT_EQ(std::system(("ls -a " + dir.file("") + " > " + listing).c_str()), 0);
+  EXPECT_EQ(readFile(listing).find(".tmp"), std::string::npos) << readFile(listing);
+  // Two temporary names for the same file never collide.
+  EXPECT_NE(temporaryPathFor("a"), temporaryPathFor("a"));
 }
 
 // Real data in ../shared/data, with the counts its files and README document.

@@ -1,7 +1,14 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
 #include <fstream>
+#include <sstream>
+#include <vector>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/file_util.h"
@@ -82,25 +89,253 @@ TEST(MapDirectory, UpdateInfoRewritesPoses) {
   EXPECT_DOUBLE_EQ(MapDirectory(tmp.file("m")).scans()[0].map_pose.x, 0.5);
 }
 
-TEST(MapDirectory, CorruptPosesFileIsReportedByNameAndLine) {
-  TempDir tmp;
+/// A map of n scans (10 points each) in tmp/m; returns its directory.
+std::string makeMap(const TempDir& tmp, uint32_t n) {
   PointCloud cloud;
-  cloud.push_back({1, 0, 0});
+  for (int i = 0; i < 100; ++i) cloud.push_back({0.01f * i, 1, 0});
+  MapDirectory map(tmp.file("m"));
+  for (uint32_t i = 0; i < n; ++i) map.append(info(i, Pose2D(i, 0, 0)), cloud);
+  return tmp.file("m");
+}
+
+std::vector<uint32_t> indices(const MapDirectory& map) {
+  std::vector<uint32_t> out;
+  for (const auto& s : map.scans()) out.push_back(s.index);
+  return out;
+}
+
+/// Expects exactly one problem, about `path`, containing `what`.
+void expectOneProblem(const MapDirectory& map, const std::string& path, const std::string& what) {
+  ASSERT_EQ(map.problems().size(), 1u);
+  EXPECT_EQ(map.problems()[0].path, path) << map.problems()[0].message();
+  EXPECT_NE(map.problems()[0].problem.find(what), std::string::npos) << map.problems()[0].message();
+}
+
+void replaceLine(const std::string& file, size_t line_no, const std::string& text) {
+  std::istringstream in(readFile(file));
+  std::string out, line;
+  for (size_t n = 1; std::getline(in, line); ++n) out += (n == line_no ? text : line) + "\n";
+  std::ofstream(file, std::ios::binary) << out;
+}
+
+TEST(MapDirectory, HealthyMapHasNoProblems) {
+  TempDir tmp;
+  const MapDirectory map(makeMap(tmp, 3));
+  EXPECT_TRUE(map.problems().empty());
+  EXPECT_EQ(map.nextIndex(), 3u);
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1, 2}));
+}
+
+TEST(MapDirectory, ScanCutInHalfIsReportedAndSkipped) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  const std::string scan = dir + "/scans/scan_0001.pcd";
+  const std::string data = readFile(scan);
+  std::ofstream(scan, std::ios::binary) << data.substr(0, data.size() / 2);
+  PointCloud cloud;
+  cloud.push_back({1, 1, 1});
   {
-    MapDirectory map(tmp.file("m"));
-    map.append(info(0, Pose2D()), cloud);
-    map.append(info(1, Pose2D()), cloud);
+    MapDirectory map(dir);
+    expectOneProblem(map, scan, "truncated PCD");
+    EXPECT_NE(map.problems()[0].problem.find("scan 1 skipped"), std::string::npos);
+    EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 2}));
+    EXPECT_EQ(map.loadScan(1).size(), 100u);  // position 1 is scan 2
+    EXPECT_EQ(map.nextIndex(), 3u);
+    expectIoError([&] { map.append(info(2, Pose2D()), cloud); }, map.posesPath(), "the next index is 3");
+    map.append(info(3, Pose2D()), cloud);
   }
-  const std::string poses = tmp.file("m/poses.csv");
-  std::string text = readFile(poses);
-  const size_t last = text.rfind('\n', text.size() - 2);
-  std::ofstream(poses) << text.substr(0, last + 1) << "1,scans/scan_0001.pcd,40,abc\n";
-  expectIoError([&] { MapDirectory m(tmp.file("m")); }, poses, "line 3: expected 17");
-  std::ofstream(poses) << "garbage\n";
-  expectIoError([&] { MapDirectory m(tmp.file("m")); }, poses, "line 1: not a scanstop poses header");
-  std::ofstream(poses) << text.substr(0, text.find('\n') + 1)
-                       << "0,../../etc/passwd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
-  expectIoError([&] { MapDirectory m(tmp.file("m")); }, poses, "must be a relative path");
+  // The skipped scan's line stays in poses.csv (its pose is intact; the file may be restored).
+  const MapDirectory again(dir);
+  expectOneProblem(again, scan, "truncated PCD");
+  EXPECT_EQ(indices(again), (std::vector<uint32_t>{0, 2, 3}));
+  EXPECT_NE(readFile(again.posesPath()).find("\n1,scans/scan_0001.pcd,"), std::string::npos);
+}
+
+TEST(MapDirectory, ZeroByteScanIsReportedAndSkipped) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  std::ofstream(dir + "/scans/scan_0000.pcd", std::ios::trunc);
+  const MapDirectory map(dir);
+  expectOneProblem(map, dir + "/scans/scan_0000.pcd", "empty file; scan 0 skipped");
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{1}));
+}
+
+TEST(MapDirectory, MissingAndGarbageScansAreReportedAndSkipped) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  ASSERT_EQ(std::remove((dir + "/scans/scan_0000.pcd").c_str()), 0);
+  std::ofstream(dir + "/scans/scan_0002.pcd", std::ios::binary) << "garbage\n";
+  const MapDirectory map(dir);
+  ASSERT_EQ(map.problems().size(), 2u);
+  EXPECT_EQ(map.problems()[0].message(), dir + "/scans/scan_0000.pcd: no such file; scan 0 skipped");
+  EXPECT_EQ(map.problems()[1].path, dir + "/scans/scan_0002.pcd");
+  EXPECT_NE(map.problems()[1].problem.find("not a valid PCD file"), std::string::npos) << map.problems()[1].message();
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{1}));
+}
+
+TEST(MapDirectory, GarbageLineInPosesIsReportedSkippedAndRepaired) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  const std::string poses = dir + "/poses.csv";
+  replaceLine(poses, 3, "1,scans/scan_0001.pcd,40,abc");
+  PointCloud cloud;
+  cloud.push_back({1, 1, 1});
+  {
+    MapDirectory map(dir);
+    expectOneProblem(map, poses, "line 3: expected 17 comma-separated values, found 4; line skipped");
+    EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 2}));
+    EXPECT_EQ(map.nextIndex(), 3u);
+    map.append(info(3, Pose2D()), cloud);  // rewrites poses.csv without the garbage line
+  }
+  EXPECT_EQ(readFile(poses).find("abc"), std::string::npos);
+  const MapDirectory again(dir);
+  // Scan 1's file is still there, now without a line: reported, not loaded.
+  expectOneProblem(again, dir + "/scans/scan_0001.pcd", "not listed in poses.csv");
+  EXPECT_EQ(indices(again), (std::vector<uint32_t>{0, 2, 3}));
+}
+
+TEST(MapDirectory, BadValuesInPosesAreReportedByLine) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 5);
+  const std::string poses = dir + "/poses.csv";
+  const std::string tail = ",0,0,0,0,0,0,0,0,0,1,0,0,0,0";
+  replaceLine(poses, 2, "-1,scans/scan_0000.pcd,0" + tail);              // negative index
+  replaceLine(poses, 3, "1e300,scans/scan_0001.pcd,0" + tail);           // huge index
+  replaceLine(poses, 4, "2,../../etc/passwd,0" + tail);                  // outside the directory
+  replaceLine(poses, 5, "3,scans/scan_0003.pcd,nan" + tail);             // NaN stamp
+  replaceLine(poses, 6, "1,scans/scan_0001.pcd,0,0,0,0,0,0,0,0,0,0,1,2.5,0,0,0");  // fractional count
+  const MapDirectory map(dir);
+  ASSERT_EQ(map.problems().size(), 5u + 2u);  // five lines, then the scan files no line names (2 and 4)
+  const char* const expected[] = {"line 2: column 1 ('-1') is not an integer",
+                                  "line 3: column 1 ('1e300') is not an integer",
+                                  "line 4: scan file name '../../etc/passwd' must be a relative path",
+                                  "line 5: column 3 ('nan') is not a finite number",
+                                  "line 6: column 14 ('2.5') is not an integer"};
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(map.problems()[i].path, poses);
+    EXPECT_NE(map.problems()[i].problem.find(expected[i]), std::string::npos) << map.problems()[i].message();
+  }
+  EXPECT_TRUE(map.scans().empty());
+  // Skipped lines whose first column is an index still count: lines 4, 5 and 6 name 2, 3 and 1.
+  EXPECT_EQ(map.nextIndex(), 4u);
+}
+
+TEST(MapDirectory, DuplicateIndexKeepsTheFirstLine) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  const std::string poses = dir + "/poses.csv";
+  std::ofstream(poses, std::ios::app) << "0,scans/scan_0001.pcd,0,9,9,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  const MapDirectory map(dir);
+  expectOneProblem(map, poses, "line 4: scan index 0 already on line 2; line skipped");
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1}));
+  EXPECT_DOUBLE_EQ(map.scans()[0].map_pose.x, 0.0);
+}
+
+// Found by map_dir_fuzzer: a line naming another index's file (1 -> scans/scan_0002.pcd, missing) made
+// append(2) write that file, and the skipped scan 1 came back on reopening as a copy of scan 2.
+TEST(MapDirectory, LineNamingAnotherScansFileIsNeverOverwritten) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  const std::string poses = dir + "/poses.csv";
+  replaceLine(poses, 3, "1,scans/scan_0002.pcd,40,1,2,1.5,1.1,2,1.5,0,0,0.5,0,7,90,0.02,0.8");
+  PointCloud cloud;
+  cloud.push_back({1, 1, 1});
+  {
+    MapDirectory map(dir);
+    ASSERT_EQ(map.problems().size(), 2u);
+    EXPECT_EQ(map.problems()[0].message(), dir + "/scans/scan_0002.pcd: no such file; scan 1 skipped");
+    EXPECT_NE(map.problems()[1].message().find("scan_0001.pcd: not listed in poses.csv"), std::string::npos);
+    EXPECT_EQ(map.nextIndex(), 3u);  // 2 would write scans/scan_0002.pcd, which line 3 names
+    map.append(info(3, Pose2D()), cloud);
+  }
+
+  const MapDirectory again(dir);
+  EXPECT_EQ(indices(again), (std::vector<uint32_t>{0, 3}));
+  // Two lines naming one file: the second is skipped.
+  std::ofstream(poses, std::ios::app) << "7,scans/scan_0000.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  const MapDirectory third(dir);
+  EXPECT_EQ(indices(third), (std::vector<uint32_t>{0, 3}));
+  const std::string expected = poses + ": line 5: file scans/scan_0000.pcd already belongs to scan 0 (line 2); line skipped";
+  EXPECT_TRUE(std::any_of(third.problems().begin(), third.problems().end(),
+                          [&](const MapProblem& p) { return p.message() == expected; }))
+      << third.problems().front().message();
+}
+
+TEST(MapDirectory, NextIndexAfterAppendSkipsANamedFile) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  // Scan 2's line names scans/scan_0004.pcd (missing): 3 is free, 4 is not.
+  std::ofstream(dir + "/poses.csv", std::ios::app) << "2,scans/scan_0004.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  MapDirectory map(dir);
+  EXPECT_EQ(map.nextIndex(), 3u);
+  PointCloud cloud;
+  cloud.push_back({1, 1, 1});
+  map.append(info(3, Pose2D()), cloud);
+  EXPECT_EQ(map.nextIndex(), 5u);
+  EXPECT_EQ(MapDirectory(dir).nextIndex(), 5u);
+}
+
+TEST(MapDirectory, PosesCutMidLineKeepsTheCompleteLines) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  const std::string poses = dir + "/poses.csv";
+  const std::string text = readFile(poses);
+  std::ofstream(poses, std::ios::binary | std::ios::trunc) << text.substr(0, text.size() - 20);
+  const MapDirectory map(dir);
+  expectOneProblem(map, poses, "line 4: ");
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1}));
+  EXPECT_EQ(map.nextIndex(), 3u);  // the cut line still names index 2
+}
+
+TEST(MapDirectory, EmptyOrHeaderlessPosesFile) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  const std::string poses = dir + "/poses.csv";
+  const std::string text = readFile(poses);
+  std::ofstream(poses, std::ios::trunc);
+  {
+    const MapDirectory map(dir);
+    ASSERT_EQ(map.problems().size(), 3u);
+    EXPECT_EQ(map.problems()[0].message(), poses + ": empty file (no header line); no scans loaded");
+    EXPECT_EQ(map.problems()[1].path, dir + "/scans/scan_0000.pcd");
+    EXPECT_NE(map.problems()[1].problem.find("not listed in poses.csv"), std::string::npos);
+    EXPECT_EQ(map.size(), 0u);
+    EXPECT_EQ(map.nextIndex(), 0u);
+  }
+  // Header lost, lines intact: the lines are read, the missing header reported.
+  std::ofstream(poses, std::ios::trunc) << text.substr(text.find('\n') + 1);
+  const MapDirectory map(dir);
+  expectOneProblem(map, poses, "line 1: the header is missing; read as a scan line");
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1}));
+  // A header that is garbage: skipped, the rest read.
+  std::ofstream(poses, std::ios::trunc) << "garbage\n" << text.substr(text.find('\n') + 1);
+  const MapDirectory map2(dir);
+  expectOneProblem(map2, poses, "line 1: not the scanstop poses header; line skipped");
+  EXPECT_EQ(map2.size(), 2u);
+}
+
+TEST(MapDirectory, InterruptedAppendLeavesAnOrphanThatTheNextScanReplaces) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  // The scan file of scan 2 was written, poses.csv not (the writer was killed in between).
+  PointCloud cloud;
+  cloud.push_back({5, 5, 5});
+  writeCloud(dir + "/scans/scan_0002.pcd", cloud);
+  MapDirectory map(dir);
+  expectOneProblem(map, dir + "/scans/scan_0002.pcd", "not listed in poses.csv (an interrupted append?)");
+  EXPECT_EQ(map.nextIndex(), 2u);
+  cloud.points[0] = Eigen::Vector3f(6, 6, 6);
+  map.append(info(2, Pose2D()), cloud);
+  const MapDirectory again(dir);
+  EXPECT_TRUE(again.problems().empty());
+  EXPECT_EQ(again.loadScan(2).points.at(0), Eigen::Vector3f(6, 6, 6));
+}
+
+TEST(MapDirectory, PosesPathThatIsNotAFileIsAnError) {
+  TempDir tmp;
+  ASSERT_EQ(::mkdir(tmp.file("m").c_str(), 0755), 0);
+  ASSERT_EQ(::mkdir(tmp.file("m/poses.csv").c_str(), 0755), 0);
+  expectIoError([&] { MapDirectory m(tmp.file("m")); }, tmp.file("m/poses.csv"), "not a regular file");
 }
 
 TEST(MapDirectory, TruncatedScanFileIsReportedByName) {

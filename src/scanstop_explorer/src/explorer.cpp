@@ -35,12 +35,18 @@ bool Explorer::addScan(uint32_t index, const Pose2D& T_map_base, const std::vect
   return true;
 }
 
-size_t Explorer::loadMapDirectory(const MapDirectory& dir) {
+size_t Explorer::loadMapDirectory(const MapDirectory& dir, std::vector<std::string>* problems) {
   size_t added = 0;
   for (size_t i = 0; i < dir.size(); ++i) {
     const MapScanInfo& info = dir.scans()[i];
     if (hasScan(info.index)) continue;
-    const PointCloud cloud = dir.loadScanInMap(i);
+    PointCloud cloud;
+    try {
+      cloud = dir.loadScanInMap(i);
+    } catch (const std::exception& e) {
+      if (problems) problems->push_back("scan " + std::to_string(info.index) + " skipped: " + e.what());
+      continue;
+    }
     added += addScan(info.index, info.map_pose, cloud.points) ? 1 : 0;
   }
   return added;

@@ -7,6 +7,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
+#include <stdexcept>
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
@@ -36,6 +38,9 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "map_dir", n.map_dir);
   optional(pnh, "run_dir", n.run_dir);
   optional(pnh, "image_scale", n.image_scale);
+  optional(pnh, "max_coordinate_m", n.max_coordinate_m);
+  optional(pnh, "max_unreachable", n.max_unreachable);
+  optional(pnh, "max_point_distance_m", n.max_point_distance_m);
   // ROS parameter names are the config fields' names (so a ConfigError names the parameter).
   optional(pnh, "resolution_m", c.floor.resolution_m);
   optional(pnh, "floor_layer_m", c.floor.floor_layer_m);
@@ -68,9 +73,58 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
     throw ConfigError("parameter in namespace " + pnh.getNamespace() + ": " + e.what());
   }
   requireInRange(pnh.resolveName("image_scale"), n.image_scale, 1, 16);
-  if (n.frame_id.empty()) throw ConfigError("parameter '" + pnh.resolveName("frame_id") + "' must not be empty");
+  requireInRange(pnh.resolveName("max_coordinate_m"), n.max_coordinate_m, 1.0, 1e6, "m");
+  requireInRange(pnh.resolveName("max_unreachable"), n.max_unreachable, 0, 1e6);
+  requireInRange(pnh.resolveName("max_point_distance_m"), n.max_point_distance_m, 0.1, 1000.0, "m");
+  if (n.frame_id.empty() || n.frame_id.front() == '/' || n.frame_id.find(' ') != std::string::npos)
+    throw ConfigError("parameter '" + pnh.resolveName("frame_id") + "' = '" + n.frame_id +
+                      "' must be a non-empty frame id without a leading '/' or spaces");
   if (!n.run_dir.empty() && !isDirectory(n.run_dir) && ::mkdir(n.run_dir.c_str(), 0755) != 0)
     throw ConfigError("parameter '" + pnh.resolveName("run_dir") + "' = '" + n.run_dir + "': cannot create the directory");
+}
+
+std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, const NodeConfig& c) {
+  std::ostringstream out;
+  const std::string& frame = req.map_pose.header.frame_id;
+  if (!frame.empty() && frame != c.frame_id) return "map_pose is in frame '" + frame + "', expected '" + c.frame_id + "'";
+  const auto& p = req.map_pose.pose.position;
+  const auto& q = req.map_pose.pose.orientation;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+    out << "map_pose.position (" << p.x << ", " << p.y << ", " << p.z << ") is not finite";
+    return out.str();
+  }
+  if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) || !std::isfinite(q.w)) {
+    out << "map_pose.orientation (" << q.x << ", " << q.y << ", " << q.z << ", " << q.w << ") is not finite";
+    return out.str();
+  }
+  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (std::abs(norm - 1.0) > 1e-3) {
+    out << "map_pose.orientation (" << q.x << ", " << q.y << ", " << q.z << ", " << q.w
+        << ") is not a unit quaternion (norm " << norm << ")";
+    return out.str();
+  }
+  if (std::hypot(p.x, p.y) > c.max_coordinate_m) {
+    out << "map_pose.position (" << p.x << ", " << p.y << ") is " << std::hypot(p.x, p.y)
+        << " m from the map origin, beyond max_coordinate_m " << c.max_coordinate_m << " m";
+    return out.str();
+  }
+  if (req.unreachable.size() > static_cast<size_t>(c.max_unreachable)) {
+    out << "unreachable has " << req.unreachable.size() << " points, more than max_unreachable " << c.max_unreachable;
+    return out.str();
+  }
+  for (size_t i = 0; i < req.unreachable.size(); ++i) {
+    const geometry_msgs::Point& u = req.unreachable[i];
+    if (!std::isfinite(u.x) || !std::isfinite(u.y) || !std::isfinite(u.z)) {
+      out << "unreachable[" << i << "] (" << u.x << ", " << u.y << ", " << u.z << ") is not finite";
+      return out.str();
+    }
+    if (std::hypot(u.x, u.y) > c.max_coordinate_m) {
+      out << "unreachable[" << i << "] (" << u.x << ", " << u.y << ") is beyond max_coordinate_m "
+          << c.max_coordinate_m << " m from the map origin";
+      return out.str();
+    }
+  }
+  return "";
 }
 
 ExplorerNode::ExplorerNode(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh) {
@@ -110,8 +164,10 @@ void ExplorerNode::loadMapDir() {
     return;
   }
   try {
-    const size_t added = explorer_->loadMapDirectory(MapDirectory(node_config_.map_dir));
+    std::vector<std::string> problems;
+    const size_t added = explorer_->loadMapDirectory(MapDirectory(node_config_.map_dir), &problems);
     if (added) ROS_INFO("explorer_node: loaded %zu scans from %s", added, node_config_.map_dir.c_str());
+    for (const std::string& p : problems) ROS_ERROR("explorer_node: map_dir: %s", p.c_str());
   } catch (const std::exception& e) {
     ROS_ERROR("explorer_node: cannot load map_dir: %s", e.what());
   }
@@ -126,7 +182,16 @@ void ExplorerNode::onScan(const scanstop_msgs::RegisteredScan& msg) {
     return;
   }
   try {
+    const geometry_msgs::Pose& pose = msg.pose.pose;
+    if (!std::isfinite(pose.position.x) || !std::isfinite(pose.position.y) ||
+        std::hypot(pose.position.x, pose.position.y) > node_config_.max_coordinate_m)
+      throw std::invalid_argument("its pose is not finite or beyond max_coordinate_m");
     const PointCloud cloud = ros_conv::fromMsg(msg.cloud);
+    const Eigen::Vector2f at(static_cast<float>(pose.position.x), static_cast<float>(pose.position.y));
+    for (size_t i = 0; i < cloud.points.size(); ++i)
+      if (cloud.points[i].allFinite() && (cloud.points[i].head<2>() - at).norm() > node_config_.max_point_distance_m)
+        throw std::invalid_argument("point " + std::to_string(i) + " is farther than max_point_distance_m " +
+                                    std::to_string(node_config_.max_point_distance_m) + " m from the scan pose");
     explorer_->addScan(msg.scan_index, ros_conv::fromPoseMsg(msg.pose.pose), cloud.points);
   } catch (const std::exception& e) {
     ROS_ERROR("explorer_node: scan %u rejected: %s", msg.scan_index, e.what());
@@ -139,21 +204,16 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
     res.duration_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return true;
   };
-  if (!req.map_pose.header.frame_id.empty() && req.map_pose.header.frame_id != node_config_.frame_id) {
+  // Everything is checked before anything is applied (map directory, blacklist, step counter).
+  const std::string problem = planRequestProblem(req, node_config_);
+  if (!problem.empty()) {
     res.success = false;
-    res.message = "map_pose is in frame '" + req.map_pose.header.frame_id + "', expected '" + node_config_.frame_id + "'";
+    res.message = "bad request: " + problem;
     res.complete_reason = res.message;
+    ROS_WARN("explorer_node: refused plan_next: %s", problem.c_str());
     return finish();
   }
-  Pose2D robot;
-  try {
-    robot = ros_conv::fromPoseMsg(req.map_pose.pose);
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = std::string("invalid map_pose: ") + e.what();
-    res.complete_reason = res.message;
-    return finish();
-  }
+  const Pose2D robot = ros_conv::fromPoseMsg(req.map_pose.pose);
   loadMapDir();  // scans published before this node started
   for (const geometry_msgs::Point& u : req.unreachable)
     if (explorer_->markUnreachable(Eigen::Vector2d(u.x, u.y)))

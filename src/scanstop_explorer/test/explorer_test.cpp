@@ -232,6 +232,36 @@ TEST(Explorer, LoadsAMapDirectory) {
   std::system(("rm -rf " + dir).c_str());
 }
 
+TEST(Explorer, SkipsACorruptScanFileOfTheMapDirectoryByNameAndLoadsTheOthers) {
+  const std::string dir = tempDir();
+  const test::Scene s = test::lShape();
+  {
+    scanstop::MapDirectory md(dir);
+    for (uint32_t i = 0; i < 3; ++i) {
+      const Pose2D pose(0.75, 0.75 + 1.2 * i, 0.0);
+      scanstop::MapScanInfo info;
+      info.index = i;
+      info.map_pose = pose;
+      scanstop::PointCloud cloud;
+      for (const auto& p : test::simulateScan(s, {pose.x, pose.y}, 4.0))
+        cloud.push_back(pose.toIsometry3f().inverse() * p);
+      md.append(info, cloud);
+    }
+  }
+  std::ofstream(dir + "/scans/scan_0001.pcd") << "VERSION .7\nFIELDS x y z\ngarbage\n";
+  Explorer ex;
+  std::vector<std::string> problems;
+  EXPECT_EQ(ex.loadMapDirectory(scanstop::MapDirectory(dir), &problems), 2u);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("scan 1 skipped"), std::string::npos) << problems[0];
+  EXPECT_NE(problems[0].find(dir + "/scans/scan_0001.pcd"), std::string::npos) << problems[0];
+  EXPECT_TRUE(ex.hasScan(0));
+  EXPECT_FALSE(ex.hasScan(1));
+  EXPECT_TRUE(ex.hasScan(2));
+  EXPECT_TRUE(ex.plan(Pose2D(0.75, 0.75, 0.0)).success);
+  std::system(("rm -rf " + dir).c_str());
+}
+
 TEST(Render, ImagesJsonAndOccupancy) {
   const test::Scene s = test::twoRooms();
   Explorer ex;

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <chrono>
+#include <stdexcept>
 #include <sstream>
 
 #include "scanstop_common/cloud_io.h"
@@ -18,7 +19,8 @@ namespace mesher {
 
 void MesherNodeConfig::validate() const {
   if (frame_id.empty()) throw ConfigError("parameter 'frame_id' is empty");
-  requireNonNegative("map_voxel_m", map_voxel_m, "m");
+  requireInRange("map_voxel_m", map_voxel_m, 0.0, 10.0, "m");
+  requireInRange("max_coordinate_m", max_coordinate_m, 1.0, 1e6, "m");
   requireNonNegative("normal_radius_m", normal_radius_m, "m");
   requireInRange("normal_min_neighbors", normal_min_neighbors, 3, 1000);
   requireOneOf("color_mode", color_mode, {"height", "normal"});
@@ -34,11 +36,26 @@ void MesherNodeConfig::validate() const {
   }
 }
 
+std::string MesherNodeConfig::allowedOutputDir() const {
+  const auto dirname = [](std::string p) {
+    while (p.size() > 1 && p.back() == '/') p.pop_back();
+    const size_t slash = p.rfind('/');
+    if (slash == std::string::npos) return std::string(".");
+    return slash == 0 ? std::string("/") : p.substr(0, slash);
+  };
+  if (!output_dir.empty()) return output_dir;
+  if (!default_output.empty()) return dirname(default_output);
+  if (!map_dir.empty()) return dirname(map_dir);
+  return "";
+}
+
 BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   MesherNodeConfig& c = config_;
   ros_params::optional(pnh, "map_dir", c.map_dir);
   ros_params::optional(pnh, "frame_id", c.frame_id);
   ros_params::optional(pnh, "default_output", c.default_output);
+  ros_params::optional(pnh, "output_dir", c.output_dir);
+  ros_params::optional(pnh, "max_coordinate_m", c.max_coordinate_m);
   ros_params::optional(pnh, "map_voxel_m", c.map_voxel_m);
   ros_params::optional(pnh, "normal_radius_m", c.normal_radius_m);
   ros_params::optional(pnh, "normal_min_neighbors", c.normal_min_neighbors);
@@ -85,27 +102,38 @@ bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop
   const auto t0 = std::chrono::steady_clock::now();
   res.success = false;
   try {
-    const std::string output = req.output_path.empty() ? config_.default_output : req.output_path;
-    if (output.empty()) throw ConfigError("output_path is empty and parameter 'default_output' is not set");
-    const std::string ext = fileExtension(output);
-    if (ext != "stl" && ext != "ply") throw ConfigError("output_path '" + output + "' must end in .stl or .ply");
+    // Every check before any work and before anything is written or published.
+    std::string output;
     MesherConfig mc;
-    mc.radii_m.assign(req.radii.begin(), req.radii.end());
-    mc.normal_radius_m = config_.normal_radius_m;
-    mc.normal_min_neighbors = config_.normal_min_neighbors;
-    mc.smooth = config_.smooth;
+    try {
+      const std::string requested = req.output_path.empty() ? config_.default_output : req.output_path;
+      if (requested.empty()) throw ConfigError("output_path is empty and parameter 'default_output' is not set");
+      output = resolveOutputPath(requested, config_.allowedOutputDir());
+      requireInRange("voxel_m", req.voxel_m, 0.0, 10.0, "m");
+      mc.radii_m.assign(req.radii.begin(), req.radii.end());
+      mc.normal_radius_m = config_.normal_radius_m;
+      mc.normal_min_neighbors = config_.normal_min_neighbors;
+      mc.smooth = config_.smooth;
+      mc.voxel_m = req.input_path.empty() && req.voxel_m == 0.0 ? config_.map_voxel_m : req.voxel_m;
+      mc.validate();
+      if (req.input_path.empty() && config_.map_dir.empty())
+        throw ConfigError("input_path is empty and parameter 'map_dir' is not set");
+    } catch (const ConfigError& e) {
+      throw ConfigError(std::string("bad request: ") + e.what());
+    }
     ScanPoints points;
     std::string source;
+    std::vector<std::string> skipped;
     if (req.input_path.empty()) {
-      if (config_.map_dir.empty()) throw ConfigError("input_path is empty and parameter 'map_dir' is not set");
-      points = loadMapDirectory(config_.map_dir);
-      mc.voxel_m = req.voxel_m > 0 ? req.voxel_m : config_.map_voxel_m;
+      points = loadMapDirectory(config_.map_dir, &skipped);
       source = "map " + config_.map_dir;
     } else {
       points = fromCloud(readCloud(req.input_path), Eigen::Vector3f::Zero());
-      mc.voxel_m = req.voxel_m;
       source = req.input_path;
     }
+    for (const std::string& s : skipped) ROS_ERROR("bpa_mesher_node: %s", s.c_str());
+    const std::string problem = pointsProblem(points, config_.max_coordinate_m);
+    if (!problem.empty()) throw std::invalid_argument("bad input " + source + ": " + problem);
     const MesherResult r = buildMesh(points, mc);
     writeMesh(output, r.mesh);
     publishMesh(r.mesh);
@@ -119,6 +147,7 @@ bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop
     for (double x : r.radii_m) msg << " " << x;
     msg << " m; " << r.topology.nonmanifold_edges << " non-manifold edges, " << r.topology.nonmanifold_vertices
         << " non-manifold vertices)";
+    for (const std::string& s : skipped) msg << "; " << s;
     res.message = msg.str();
     ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
   } catch (const std::exception& e) {

@@ -1,6 +1,9 @@
 #include "scanstop_mesher/mesher.h"
 
 #include <Eigen/Eigenvalues>
+#include <climits>
+#include <cstdlib>
+#include <sys/stat.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -10,6 +13,7 @@
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_mesher/spatial_grid.h"
 
@@ -29,22 +33,101 @@ std::vector<Eigen::Vector3d> toDouble(const std::vector<Eigen::Vector3f>& pts) {
 
 }  // namespace
 
-ScanPoints loadMapDirectory(const std::string& dir) {
+ScanPoints loadMapDirectory(const std::string& dir, std::vector<std::string>* skipped) {
+  // Reading must not create anything (MapDirectory would create a missing directory).
+  struct stat st;
+  if (::stat((dir + "/poses.csv").c_str(), &st) != 0)
+    throw IoError(dir + "/poses.csv", "does not exist (no scan in the map yet)");
   const MapDirectory map(dir);
   if (map.size() == 0) throw IoError(map.posesPath(), "the map has no scans");
   ScanPoints out;
+  size_t loaded = 0;
   for (size_t s = 0; s < map.size(); ++s) {
     const MapScanInfo& info = map.scans()[s];
     const Eigen::Isometry3f T_map_base = info.map_pose.toIsometry3f();
-    const PointCloud scan = map.loadScan(s);
+    // The origin is kept for a skipped scan too: views index origins by scan.
     out.origins.push_back(T_map_base * info.sensor_origin.cast<float>());
+    PointCloud scan;
+    try {
+      scan = map.loadScan(s);
+    } catch (const std::exception& e) {
+      if (!skipped) throw;
+      skipped->push_back("scan " + std::to_string(info.index) + " skipped: " + e.what());
+      continue;
+    }
+    ++loaded;
     for (const auto& p : scan.points) {
       if (!p.allFinite()) continue;
       out.points.push_back(T_map_base * p);
       out.view.push_back(static_cast<uint32_t>(s));
     }
   }
+  if (loaded == 0) throw IoError(dir, "none of its " + std::to_string(map.size()) + " scan files could be read");
   return out;
+}
+
+namespace {
+
+/// '.' and '..' resolved on the text alone; throws when '..' climbs above the root.
+std::string normalizeLexically(const std::string& path, const std::string& original) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (start <= path.size()) {
+    const size_t end = std::min(path.find('/', start), path.size());
+    const std::string part = path.substr(start, end - start);
+    if (part == "..") {
+      if (parts.empty()) throw ConfigError("output_path '" + original + "' climbs above the root directory");
+      parts.pop_back();
+    } else if (!part.empty() && part != ".") {
+      parts.push_back(part);
+    }
+    start = end + 1;
+  }
+  std::string out;
+  for (const std::string& p : parts) out += "/" + p;
+  return out.empty() ? "/" : out;
+}
+
+std::string realDirectory(const std::string& dir, const std::string& what) {
+  char buf[PATH_MAX];
+  if (!::realpath(dir.c_str(), buf)) throw ConfigError(what + " '" + dir + "' does not exist");
+  struct stat st;
+  if (::stat(buf, &st) != 0 || !S_ISDIR(st.st_mode)) throw ConfigError(what + " '" + dir + "' is not a directory");
+  return buf;
+}
+
+}  // namespace
+
+std::string resolveOutputPath(const std::string& path, const std::string& allowed_dir) {
+  if (path.empty()) throw ConfigError("output_path is empty");
+  if (allowed_dir.empty())
+    throw ConfigError("output_path '" + path + "' refused: no output directory is allowed (set parameter 'output_dir')");
+  const std::string ext = fileExtension(path);
+  if (ext != "stl" && ext != "ply") throw ConfigError("output_path '" + path + "' must end in .stl or .ply");
+  const std::string allowed = realDirectory(allowed_dir, "the output directory");
+  const std::string full = normalizeLexically(path[0] == '/' ? path : allowed + "/" + path, path);
+  const size_t slash = full.rfind('/');
+  const std::string name = full.substr(slash + 1);
+  const std::string parent = realDirectory(slash == 0 ? "/" : full.substr(0, slash), "the directory of output_path");
+  const std::string resolved = (parent == "/" ? "" : parent) + "/" + name;
+  if (resolved.compare(0, allowed.size() + 1, allowed + "/") != 0)
+    throw ConfigError("output_path '" + path + "' (" + resolved + ") lies outside the output directory " + allowed);
+  struct stat st;
+  if (::stat(resolved.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw ConfigError("output_path '" + path + "' is a directory");
+  return resolved;
+}
+
+std::string pointsProblem(const ScanPoints& points, double max_abs_m) {
+  if (points.size() == 0) return "there are no finite points to mesh";
+  for (size_t i = 0; i < points.size(); ++i)
+    if (!points.points[i].allFinite() || points.points[i].cwiseAbs().maxCoeff() > max_abs_m) {
+      std::ostringstream out;
+      out << "point " << i << " (" << points.points[i].x() << ", " << points.points[i].y() << ", "
+          << points.points[i].z() << ") lies beyond " << max_abs_m << " m of the origin (absurd coordinates)";
+      return out.str();
+    }
+  return "";
 }
 
 ScanPoints fromCloud(const PointCloud& cloud, const Eigen::Vector3f& viewpoint) {
@@ -181,12 +264,15 @@ size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors, bool
 }
 
 void MesherConfig::validate() const {
-  requireNonNegative("voxel_m", voxel_m, "m");
+  requireInRange("voxel_m", voxel_m, 0.0, 10.0, "m");
   requireNonNegative("normal_radius_m", normal_radius_m, "m");
   requireInRange("normal_min_neighbors", normal_min_neighbors, 3, 1000);
+  if (radii_m.size() > 32)
+    throw ConfigError("radii_m has " + std::to_string(radii_m.size()) + " radii, at most 32 are allowed");
   double prev = 0.0;
   for (size_t k = 0; k < radii_m.size(); ++k) {
     requirePositive("radii_m[" + std::to_string(k) + "]", radii_m[k], "m");
+    requireInRange("radii_m[" + std::to_string(k) + "]", radii_m[k], 0.0, 10.0, "m");
     if (radii_m[k] <= prev)
       throw ConfigError("radii_m must increase: radii_m[" + std::to_string(k) + "] = " + std::to_string(radii_m[k]) +
                         " m after " + std::to_string(prev) + " m");

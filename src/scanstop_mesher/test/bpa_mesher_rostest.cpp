@@ -8,6 +8,8 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <functional>
 #include <string>
@@ -85,6 +87,10 @@ TEST(BpaMesherNode, BuildsMeshesOfTheMapAndOfFilesAndReportsErrors) {
   ros::ServiceClient client = nh.serviceClient<scanstop_msgs::BuildMesh>("mesher/build_mesh");
   scanstop_msgs::BuildMesh srv;
   srv.request.output_path = g_map_dir + "/mesh.ply";
+  ASSERT_TRUE(client.call(srv));
+  EXPECT_FALSE(srv.response.success) << "no directory for the output yet";
+  EXPECT_NE(srv.response.message.find("does not exist"), std::string::npos) << srv.response.message;
+  ASSERT_EQ(::mkdir(g_map_dir.c_str(), 0755), 0);  // the run directory exists, the map not yet
   ASSERT_TRUE(client.call(srv));
   EXPECT_FALSE(srv.response.success) << "no map yet";
   EXPECT_NE(srv.response.message.find("poses.csv"), std::string::npos) << srv.response.message;

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <thread>
+#include <vector>
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
@@ -34,9 +36,16 @@ void MissionConfig::validate() const {
   requireInRange("waypoint_tolerance", waypoint_tolerance_m, 0.0, 1.0, "m");
   requireInRange("heading_tolerance", heading_tolerance_rad, 0.0, 0.5, "rad");
   requireInRange("max_step_retries", max_step_retries, 0, 100);
+  requireInRange("retry_backoff", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
   requireInRange("max_cycles", max_cycles, 1, 1000000);
   if (run_dir.empty()) throw ConfigError("parameter 'run_dir' is empty: the mission needs a run directory");
+  if (!mesh_output.empty()) {
+    const size_t dot = mesh_output.rfind('.');
+    const std::string ext = dot == std::string::npos ? "" : mesh_output.substr(dot + 1);
+    if (ext != "ply" && ext != "stl")
+      throw ConfigError("parameter 'mesh_output' = '" + mesh_output + "' must end in .ply or .stl (or be empty: the mesher's default_output)");
+  }
 }
 
 Mission::Mission(MissionConfig config, RobotSystem& robot, Log info, Log warn)
@@ -51,31 +60,72 @@ bool Mission::loadSavedState() {
   std::ifstream probe(statePath());
   if (!probe) return false;
   MissionState loaded = MissionState::load(statePath());
-  std::lock_guard<std::mutex> lock(mutex_);
-  state_ = loaded;
-  if (state_.world.empty()) state_.world = config_.world;
-  // Adopt scans SLAM registered after our last save (we died between its answer and our save).
-  const int slam_count = robot_.registeredScanCount();
-  const int known = state_.scans.empty() ? 0 : state_.scans.back().index + 1;
-  for (int i = known; i < slam_count; ++i) {
-    const std::optional<Pose2D> pose = robot_.registeredScanPose(i);
-    if (!pose) break;
-    ScanRecord r;
-    r.index = i;
-    r.map_pose = *pose;
-    r.odom_pose = state_.odom_now;
-    state_.scans.push_back(r);
-    state_.last_map_pose = *pose;
-    state_.odom_at_last_scan = state_.odom_now;
-    state_.events.push_back({state_.elapsed_s, "adopted scan " + std::to_string(i) + " registered before a restart"});
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_ = loaded;
+    if (state_.world.empty()) state_.world = config_.world;
   }
+  // Adopt scans SLAM registered after our last save (we died between its answer and our save).
+  adoptScansRegisteredElsewhere();
+  // The mission may have died while the base carried out a motion it had asked for: the saved
+  // odometry is then stale, and driving on from it would overshoot. Take the base's word.
+  const std::optional<Pose2D> odom = robot_.currentOdometry();
+  std::lock_guard<std::mutex> lock(mutex_);
   if (state_.state == State::Done || state_.state == State::Aborted || state_.state == State::Failed) {
     // A finished mission is re-opened for viewing; a new run() continues exploring from its map.
     state_.events.push_back({state_.elapsed_s, std::string("re-opened a mission that ended ") + toString(state_.state)});
   }
   state_.state = State::Idle;
   elapsed_at_start_ = state_.elapsed_s;
+  if (odom) {
+    const Pose2D moved = state_.odom_now.between(*odom);
+    if (std::hypot(moved.x, moved.y) > 1e-4 || std::abs(moved.yaw) > 1e-4)
+      state_.events.push_back({state_.elapsed_s, "odometry moved by (" + fmt(moved.x, 3) + ", " + fmt(moved.y, 3) +
+                                                     " m, " + fmt(moved.yaw * 180.0 / M_PI, 2) +
+                                                     " deg) since the last save: a motion finished after the restart"});
+    state_.odom_now = *odom;
+  }
   return true;
+}
+
+void Mission::adoptScansRegisteredElsewhere(int upto) {
+  int known = 0;
+  Pose2D odom_now;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    known = state_.scans.empty() ? 0 : state_.scans.back().index + 1;
+    odom_now = state_.odom_now;
+  }
+  int count = robot_.registeredScanCount();
+  if (upto >= 0) count = std::min(count, upto);
+  std::vector<ScanRecord> found;
+  for (int i = known; i < count; ++i) {
+    const std::optional<Pose2D> pose = robot_.registeredScanPose(i);
+    if (!pose) break;
+    ScanRecord r;
+    r.index = i;
+    r.map_pose = *pose;
+    r.odom_pose = robot_.registeredScanOdometry(i).value_or(odom_now);
+    found.push_back(r);
+  }
+  if (found.empty()) return;
+  double at_s = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    at_s = state_.elapsed_s;
+    for (const ScanRecord& r : found) {
+      if (r.index != (state_.scans.empty() ? 0 : state_.scans.back().index + 1)) break;
+      state_.scans.push_back(r);
+      state_.last_map_pose = r.map_pose;
+      state_.odom_at_last_scan = r.odom_pose;
+      state_.events.push_back({state_.elapsed_s, "adopted scan " + std::to_string(r.index) + " registered before a restart"});
+    }
+  }
+  for (const ScanRecord& r : found) {
+    const std::string line = "adopted scan " + std::to_string(r.index) + " that SLAM registered for a previous mission_node";
+    std::ofstream(logPath(), std::ios::app) << fmt(at_s, 1) << " s  INFO " << line << '\n';
+    info_(line);
+  }
 }
 
 double Mission::elapsed() const {
@@ -84,8 +134,17 @@ double Mission::elapsed() const {
 }
 
 void Mission::setState(State s) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  state_.state = s;
+  bool changed = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    changed = state_.state != s;
+    state_.state = s;
+  }
+  if (changed) notifyState();
+}
+
+void Mission::notifyState() {
+  if (state_listener_) state_listener_();
 }
 
 void Mission::event(const std::string& what, bool warning) {
@@ -111,25 +170,48 @@ MissionState Mission::snapshot() const {
   return copy;
 }
 
-void Mission::pause() {
+bool Mission::pause(std::string* why) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (control_ == Control::Run) control_ = Control::Pause;
+  const char* refusal = control_ == Control::Pause   ? "the mission is already paused"
+                        : control_ == Control::Abort ? "the mission is being aborted"
+                                                     : nullptr;
+  if (refusal) {
+    if (why) *why = refusal;
+    return false;
+  }
+  control_ = Control::Pause;
+  return true;
 }
 
-void Mission::resume() {
+bool Mission::resume(std::string* why) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (control_ == Control::Pause) control_ = Control::Run;
+    if (control_ != Control::Pause) {
+      if (why) *why = control_ == Control::Abort ? "the mission is being aborted" : "the mission is not paused";
+      return false;
+    }
+    control_ = Control::Run;
   }
   control_cv_.notify_all();
+  return true;
 }
 
-void Mission::abort() {
+bool Mission::abort(std::string* why) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (control_ == Control::Abort) {
+      if (why) *why = "the mission is already being aborted";
+      return false;
+    }
     control_ = Control::Abort;
   }
   control_cv_.notify_all();
+  return true;
+}
+
+bool Mission::paused() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return control_ == Control::Pause;
 }
 
 bool Mission::checkControl() {
@@ -138,6 +220,7 @@ bool Mission::checkControl() {
     const State before = state_.state;
     state_.state = State::Paused;
     lock.unlock();
+    notifyState();
     info_("mission paused; call mission/resume to continue or mission/abort to stop");
     save();
     lock.lock();
@@ -145,11 +228,19 @@ bool Mission::checkControl() {
     state_.state = before;
     if (control_ == Control::Run) {
       lock.unlock();
+      notifyState();
       info_("mission resumed");
       lock.lock();
     }
   }
   return control_ != Control::Abort;
+}
+
+void Mission::backoff(int attempt) {
+  if (attempt <= 0 || config_.retry_backoff_s <= 0.0) return;
+  std::unique_lock<std::mutex> lock(mutex_);
+  control_cv_.wait_for(lock, std::chrono::duration<double>(attempt * config_.retry_backoff_s),
+                       [this] { return control_ == Control::Abort; });
 }
 
 bool Mission::budgetReached() const {
@@ -158,9 +249,11 @@ bool Mission::budgetReached() const {
 }
 
 bool Mission::scanAndRegister() {
+  adoptScansRegisteredElsewhere();  // a registration a dead predecessor left running may have ended since
   // Scan (retried: a scan changes nothing in the world).
   ScanResult scan;
   for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
+    backoff(attempt);
     if (!checkControl()) return false;
     setState(State::Scanning);
     scan = robot_.takeScan(config_.planes);
@@ -182,8 +275,10 @@ bool Mission::scanAndRegister() {
   const int before = robot_.registeredScanCount();
   RegisterResult reg;
   for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
+    backoff(attempt);
     reg = robot_.registerScan(scan);
     if (reg.success) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // a map update sent with the lost answer
     const int after = robot_.registeredScanCount();
     if (before >= 0 && after > before) {
       if (const std::optional<Pose2D> pose = robot_.registeredScanPose(after - 1)) {
@@ -198,6 +293,7 @@ bool Mission::scanAndRegister() {
     event("registration failed (attempt " + std::to_string(attempt + 1) + "): " + reg.message, true);
   }
   if (!reg.success) return false;
+  adoptScansRegisteredElsewhere(static_cast<int>(reg.scan_index));  // ended while we scanned
 
   ScanRecord record;
   record.index = static_cast<int>(reg.scan_index);
@@ -281,14 +377,15 @@ bool Mission::driveTo(const Eigen::Vector2d& waypoint, bool& collision) {
 }
 
 State Mission::run() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    control_ = Control::Run;  // a new run after an abort starts afresh
+  }
   started_ = std::chrono::steady_clock::now();
   info_("mission started in " + config_.run_dir + " (" + std::to_string(config_.planes) + " planes per scan" +
         (config_.max_scans > 0 ? ", at most " + std::to_string(config_.max_scans) + " scans" : std::string()) + ")");
   const auto finish = [this](State s, const std::string& why) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      state_.state = s;
-    }
+    setState(s);
     event(std::string("mission ") + toString(s) + ": " + why, s == State::Failed);
     save();
     return s;
@@ -305,43 +402,73 @@ State Mission::run() {
       return finish(State::Failed, std::to_string(failed_cycles) + " cycles in a row made no progress; last error: " +
                                        snapshot().last_error);
 
-    // Plan.
-    setState(State::Planning);
+    adoptScansRegisteredElsewhere();
     PlanResult plan;
-    const MissionState now = snapshot();
-    for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
-      plan = robot_.planNext(now.estimate(), now.unreachable);
-      if (plan.success) break;
-      event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
+    size_t first = 0;  // the waypoint to drive to first
+    MissionState now = snapshot();
+    if (!now.path.empty()) {
+      // A restarted mission drives on along the path it was driving (saved after every step).
+      plan.waypoints = now.path;
+      plan.scan_at = now.path_scan_at;
+      plan.target = now.path_target;
+      first = static_cast<size_t>(now.path_next);
+      if (now.path_scan_mark >= 0 && static_cast<int>(now.scans.size()) > now.path_scan_mark) ++first;  // scanned there
+      event("driving on along the saved path to (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) +
+            ") from waypoint " + std::to_string(first + 1) + " of " + std::to_string(plan.waypoints.size()));
+    } else {
+      // Plan.
+      setState(State::Planning);
+      for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
+        backoff(attempt);
+        plan = robot_.planNext(now.estimate(), now.unreachable);
+        if (plan.success) break;
+        event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
+      }
+      if (!plan.success) return finish(State::Failed, "the explorer could not plan: " + plan.message);
+      pending_plan_wall_s_ += plan.wall_time_s;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        state_.plans += 1;
+        state_.coverage = plan.coverage;
+        state_.modelled_time_s += plan.duration_s;
+        if (!state_.scans.empty()) state_.scans.back().coverage = plan.coverage;
+      }
+      if (plan.complete) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        state_.complete = true;
+        state_.complete_reason = plan.complete_reason;
+      }
+      if (plan.complete) break;
+      if (budgetReached()) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        state_.complete_reason = "scan budget of " + std::to_string(config_.max_scans) + " scans reached";
+        break;
+      }
+      if (plan.waypoints.empty()) {
+        ++failed_cycles;
+        event("the explorer returned an empty path without completing; replanning", true);
+        continue;
+      }
+      info_("plan " + std::to_string(now.plans + 1) + ": target (" + fmt(plan.target.x()) + ", " +
+            fmt(plan.target.y()) + "), " + std::to_string(plan.waypoints.size()) + " waypoints, score " +
+            fmt(plan.score, 4) + ", coverage " + fmt(plan.coverage * 100.0, 1) + " %");
     }
-    if (!plan.success) return finish(State::Failed, "the explorer could not plan: " + plan.message);
-    pending_plan_wall_s_ += plan.wall_time_s;
-    {
+    const auto setPath = [this, &plan](size_t next, int scan_mark) {
       std::lock_guard<std::mutex> lock(mutex_);
-      state_.plans += 1;
-      state_.coverage = plan.coverage;
-      state_.modelled_time_s += plan.duration_s;
-      if (!state_.scans.empty()) state_.scans.back().coverage = plan.coverage;
-    }
-    if (plan.complete) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      state_.complete = true;
-      state_.complete_reason = plan.complete_reason;
-    }
-    if (plan.complete) break;
-    if (budgetReached()) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      state_.complete_reason = "scan budget of " + std::to_string(config_.max_scans) + " scans reached";
-      break;
-    }
-    if (plan.waypoints.empty()) {
-      ++failed_cycles;
-      event("the explorer returned an empty path without completing; replanning", true);
-      continue;
-    }
-    info_("plan " + std::to_string(now.plans + 1) + ": target (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) +
-          "), " + std::to_string(plan.waypoints.size()) + " waypoints, score " + fmt(plan.score, 4) + ", coverage " +
-          fmt(plan.coverage * 100.0, 1) + " %");
+      if (next >= plan.waypoints.size()) {
+        state_.path.clear();
+        state_.path_scan_at.clear();
+        state_.path_next = 0;
+        state_.path_scan_mark = -1;
+        return;
+      }
+      state_.path = plan.waypoints;
+      state_.path_scan_at = plan.scan_at;
+      state_.path_target = plan.target;
+      state_.path_next = static_cast<int>(next);
+      state_.path_scan_mark = scan_mark;
+    };
+    setPath(first, -1);
     save();
 
     // Drive the path, scanning where the plan says.
@@ -349,10 +476,11 @@ State Mission::run() {
     bool replan = false;
     double travel = 0.0;  // planned path length since the last scan [m]
     Eigen::Vector2d from(now.estimate().x, now.estimate().y);
-    for (size_t i = 0; i < plan.waypoints.size() && !replan; ++i) {
+    for (size_t i = first; i < plan.waypoints.size() && !replan; ++i) {
       travel += (plan.waypoints[i] - from).norm();
       from = plan.waypoints[i];
       bool collision = false;
+      setPath(i, -1);
       if (!driveTo(plan.waypoints[i], collision)) {
         if (!checkControl()) return finish(State::Aborted, "aborted by the user");
         {
@@ -360,6 +488,7 @@ State Mission::run() {
           if (collision) state_.collisions += 1;
           state_.unreachable.push_back(plan.target);
         }
+        setPath(plan.waypoints.size(), -1);
         event("target (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) +
                   ") marked unreachable; scanning here to re-localize, then replanning",
               true);
@@ -372,13 +501,19 @@ State Mission::run() {
       const bool scan_here = last || (landmark && travel >= config_.min_scan_travel_m);
       if (scan_here) {
         travel = 0.0;
+        setPath(i, static_cast<int>(snapshot().scans.size()));
+        save();
         if (!scanAndRegister()) {
           if (!checkControl()) return finish(State::Aborted, "aborted by the user");
           replan = true;
         }
-        if (budgetReached()) break;
       }
+      setPath(replan ? plan.waypoints.size() : i + 1, -1);
+      save();
+      if (scan_here && budgetReached()) break;
     }
+    setPath(plan.waypoints.size(), -1);
+    save();
     failed_cycles = snapshot().scans.size() > scans_before ? 0 : failed_cycles + 1;
   }
 
@@ -388,7 +523,14 @@ State Mission::run() {
 
   if (config_.build_mesh) {
     setState(State::Meshing);
-    const MeshResult mesh = robot_.buildMesh(config_.run_dir + "/mesh.ply");
+    MeshResult mesh;
+    for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
+      backoff(attempt);
+      if (!checkControl()) return finish(State::Aborted, "aborted by the user");
+      mesh = robot_.buildMesh(config_.mesh_output);
+      if (!mesh.available || mesh.success) break;
+      event("meshing failed (attempt " + std::to_string(attempt + 1) + "): " + mesh.message, true);
+    }
     if (!mesh.available)
       info_("no mesher is running; skipping the mesh");
     else if (mesh.success)

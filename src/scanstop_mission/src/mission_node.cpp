@@ -41,9 +41,12 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "heading_tolerance", config_.heading_tolerance_rad);
   ros_params::optional(pnh, "min_scan_travel", config_.min_scan_travel_m);
   ros_params::optional(pnh, "max_step_retries", config_.max_step_retries);
+  ros_params::optional(pnh, "retry_backoff", config_.retry_backoff_s);
   ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
   ros_params::optional(pnh, "build_mesh", config_.build_mesh);
   ros_params::optional(pnh, "world", config_.world);
+  config_.mesh_output = config_.run_dir + "/mesh.ply";
+  ros_params::optional(pnh, "mesh_output", config_.mesh_output);
   std::string map_dir = config_.run_dir + "/map";
   ros_params::optional(pnh, "map_dir", map_dir);
   CallTimeouts timeouts;
@@ -66,7 +69,26 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   bool autostart = true;
   ros_params::optional(pnh, "autostart", autostart);
   ros_params::optional(pnh, "shutdown_when_done", shutdown_when_done_);
-  config_.validate();
+  // A misspelt parameter would silently keep its default: refuse it.
+  const std::vector<std::string> unknown = ros_params::unknownParameters(
+      pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
+            "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
+            "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
+            "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output"});
+  if (!unknown.empty()) {
+    std::string names;
+    for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
+    throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
+                      "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, max_step_retries, "
+                      "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
+                      "autostart, shutdown_when_done");
+  }
+  try {
+    config_.validate();
+  } catch (const ConfigError& e) {
+    throw ConfigError(std::string(e.what()) + " (in " + pnh.getNamespace() + ")");
+  }
+  if (map_dir.empty()) throw ConfigError("parameter '" + pnh.resolveName("map_dir") + "' is empty");
 
   robot_ = std::make_unique<RosRobotSystem>(nh_, timeouts, map_dir);
   mission_ = std::make_unique<Mission>(
@@ -77,6 +99,10 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
              mission_->snapshot().scans.size());
 
   status_pub_ = nh_.advertise<scanstop_msgs::MissionStatus>("mission/status", 10, true);
+  mission_->setStateListener([this] {
+    ros::WallTimerEvent none;
+    publishStatus(none);
+  });
   start_srv_ = nh_.advertiseService("mission/start", &MissionNode::onStart, this);
   pause_srv_ = nh_.advertiseService("mission/pause", &MissionNode::onPause, this);
   resume_srv_ = nh_.advertiseService("mission/resume", &MissionNode::onResume, this);
@@ -125,7 +151,8 @@ void MissionNode::runMission() {
 bool MissionNode::onStart(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   if (running_) {
     res.success = false;
-    res.message = "the mission is already running";
+    res.message = "refused: the mission is already running (state " + std::string(toString(mission_->snapshot().state)) +
+                  "); use mission/resume after a pause";
     return true;
   }
   if (runner_.joinable()) runner_.join();
@@ -137,23 +164,27 @@ bool MissionNode::onStart(std_srvs::Trigger::Request&, std_srvs::Trigger::Respon
 }
 
 bool MissionNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  res.success = running_;
-  res.message = running_ ? "pausing after the current step" : "no mission is running";
-  if (running_) mission_->pause();
+  std::string why;
+  res.success = running_ && mission_->pause(&why);
+  res.message = !running_ ? "refused: no mission is running"
+                : res.success ? "pausing after the current step"
+                              : "refused: " + why;
   return true;
 }
 
 bool MissionNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  res.success = running_;
-  res.message = running_ ? "resumed" : "no mission is running";
-  if (running_) mission_->resume();
+  std::string why;
+  res.success = running_ && mission_->resume(&why);
+  res.message = !running_ ? "refused: no mission is running" : res.success ? "resumed" : "refused: " + why;
   return true;
 }
 
 bool MissionNode::onAbort(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  res.success = running_;
-  res.message = running_ ? "aborting after the current step; the state and map are kept" : "no mission is running";
-  if (running_) mission_->abort();
+  std::string why;
+  res.success = running_ && mission_->abort(&why);
+  res.message = !running_       ? "refused: no mission is running"
+                : res.success ? "aborting after the current step; the state and map are kept"
+                              : "refused: " + why;
   return true;
 }
 

@@ -6,10 +6,12 @@
 int main(int argc, char** argv) {
   ros::init(argc, argv, "mission_node");
   ros::NodeHandle nh, pnh("~");
+  // Spin before the node is built: resuming a saved mission (in the constructor) waits for the
+  // latched odom and slam/path messages.
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
   try {
     scanstop::mission::MissionNode node(nh, pnh);
-    ros::AsyncSpinner spinner(2);
-    spinner.start();
     ros::waitForShutdown();
   } catch (const std::exception& e) {
     ROS_FATAL("mission_node: %s", e.what());

@@ -53,6 +53,23 @@ void MissionState::save(const std::string& path) const {
   root["last_map_pose"] = poseNode(last_map_pose);
   root["odom_at_last_scan"] = poseNode(odom_at_last_scan);
   root["odom_now"] = poseNode(odom_now);
+  YAML::Node path_list(YAML::NodeType::Sequence);
+  for (size_t i = 0; i < this->path.size(); ++i) {
+    YAML::Node n(YAML::NodeType::Sequence);
+    n.SetStyle(YAML::EmitterStyle::Flow);
+    n.push_back(this->path[i].x());
+    n.push_back(this->path[i].y());
+    n.push_back(i < path_scan_at.size() && path_scan_at[i] ? 1 : 0);
+    path_list.push_back(n);
+  }
+  root["path"] = path_list;
+  YAML::Node target(YAML::NodeType::Sequence);
+  target.SetStyle(YAML::EmitterStyle::Flow);
+  target.push_back(path_target.x());
+  target.push_back(path_target.y());
+  root["path_target"] = target;
+  root["path_next"] = path_next;
+  root["path_scan_mark"] = path_scan_mark;
   YAML::Node scan_list(YAML::NodeType::Sequence);
   for (const ScanRecord& s : scans) {
     YAML::Node n;
@@ -130,6 +147,16 @@ MissionState MissionState::load(const std::string& path) {
                                  std::to_string(m.scans.back().index) + ")");
       m.scans.push_back(s);
     }
+    for (const YAML::Node& n : root["path"]) {
+      m.path.emplace_back(n[0].as<double>(), n[1].as<double>());
+      m.path_scan_at.push_back(n[2].as<int>(0) != 0);
+    }
+    if (root["path_target"]) m.path_target = Eigen::Vector2d(root["path_target"][0].as<double>(), root["path_target"][1].as<double>());
+    m.path_next = root["path_next"].as<int>(0);
+    m.path_scan_mark = root["path_scan_mark"].as<int>(-1);
+    if (m.path_next < 0 || m.path_next > static_cast<int>(m.path.size()))
+      throw std::runtime_error("path_next " + std::to_string(m.path_next) + " is outside the path of " +
+                               std::to_string(m.path.size()) + " waypoints");
     for (const YAML::Node& n : root["unreachable"]) m.unreachable.emplace_back(n[0].as<double>(), n[1].as<double>());
     for (const YAML::Node& n : root["events"]) m.events.push_back({n["elapsed_s"].as<double>(), n["what"].as<std::string>()});
   } catch (const std::exception& e) {

@@ -8,6 +8,7 @@
 #include <scanstop_msgs/Rotate.h>
 #include <scanstop_msgs/TakeScan.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <memory>
@@ -91,6 +92,42 @@ RosRobotSystem::RosRobotSystem(ros::NodeHandle& nh, const CallTimeouts& timeouts
   plan_next_ = nh_.serviceClient<scanstop_msgs::PlanNext>("explorer/plan_next");
   build_mesh_ = nh_.serviceClient<scanstop_msgs::BuildMesh>("mesher/build_mesh");
   ground_truth_sub_ = nh_.subscribe("ground_truth", 10, &RosRobotSystem::onGroundTruth, this);
+  odom_sub_ = nh_.subscribe("odom", 10, &RosRobotSystem::onOdometry, this);
+  slam_path_sub_ = nh_.subscribe("slam/path", 1, &RosRobotSystem::onSlamPath, this);
+}
+
+void RosRobotSystem::onSlamPath(const nav_msgs::Path::ConstPtr& msg) {
+  std::vector<Pose2D> poses;
+  try {
+    for (const auto& p : msg->poses) poses.push_back(ros_conv::fromPoseMsg(p.pose));
+  } catch (const std::exception& e) {
+    ROS_WARN_THROTTLE(10.0, "ignoring a malformed slam/path message: %s", e.what());
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  slam_path_ = std::move(poses);
+}
+
+void RosRobotSystem::onOdometry(const nav_msgs::Odometry::ConstPtr& msg) {
+  try {
+    const Pose2D p = ros_conv::fromPoseMsg(msg->pose.pose);
+    std::lock_guard<std::mutex> lock(mutex_);
+    odom_ = p;
+  } catch (const std::exception& e) {
+    ROS_WARN_THROTTLE(10.0, "ignoring a malformed odom message: %s", e.what());
+  }
+}
+
+std::optional<Pose2D> RosRobotSystem::currentOdometry() {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeouts_.wait_for_service_s);
+  while (ros::ok() && ros::WallTime::now() < deadline) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (odom_) return odom_;
+    }
+    ros::WallDuration(0.05).sleep();
+  }
+  return std::nullopt;
 }
 
 void RosRobotSystem::onGroundTruth(const nav_msgs::Odometry::ConstPtr& msg) {
@@ -180,6 +217,7 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
     p.y = u.y();
     srv.request.unreachable.push_back(p);
   }
+  if (!mesher_seen_ && build_mesh_.exists()) mesher_seen_ = true;  // a mesher runs: wait for it at the end
   if (!callWithTimeout(plan_next_, srv, timeouts_.wait_for_service_s, timeouts_.plan_s, r.message, r.wall_time_s))
     return r;
   copyStep(r, srv.response);
@@ -195,10 +233,14 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
 
 MeshResult RosRobotSystem::buildMesh(const std::string& output_path) {
   MeshResult r;
-  if (!build_mesh_.exists()) {
+  // A mesher seen during the mission may be restarting (respawn): wait for it as for any service.
+  // One never seen gets a short look only: no mesher is not an error.
+  const double wait_s = mesher_seen_ ? timeouts_.wait_for_service_s : std::min(2.0, timeouts_.wait_for_service_s);
+  if (!build_mesh_.waitForExistence(ros::Duration(wait_s))) {
     r.available = false;
     return r;
   }
+  mesher_seen_ = true;
   r.available = true;
   scanstop_msgs::BuildMesh srv;
   srv.request.output_path = output_path;
@@ -210,24 +252,40 @@ MeshResult RosRobotSystem::buildMesh(const std::string& output_path) {
   return r;
 }
 
+// The SLAM map as the mission can see it: the map directory when it is on this host (the same run
+// directory), else slam/path (latched; SLAM on another host). The larger of the two counts wins: the
+// path message may still be on its way when the map directory is already written, and vice versa.
 int RosRobotSystem::registeredScanCount() {
+  int from_dir = -1;
   try {
-    return static_cast<int>(MapDirectory(map_dir_).size());
+    from_dir = static_cast<int>(MapDirectory(map_dir_).size());
   } catch (const std::exception& e) {
     ROS_WARN("cannot read the SLAM map directory %s: %s", map_dir_.c_str(), e.what());
-    return -1;
   }
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::max(from_dir, slam_path_.empty() ? from_dir : static_cast<int>(slam_path_.size()));
 }
 
 std::optional<Pose2D> RosRobotSystem::registeredScanPose(int index) {
   try {
     const MapDirectory map(map_dir_);
-    if (index < 0 || index >= static_cast<int>(map.size())) return std::nullopt;
-    return map.scans()[index].map_pose;
+    if (index >= 0 && index < static_cast<int>(map.size())) return map.scans()[index].map_pose;
   } catch (const std::exception& e) {
     ROS_WARN("cannot read the SLAM map directory %s: %s", map_dir_.c_str(), e.what());
-    return std::nullopt;
   }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (index >= 0 && index < static_cast<int>(slam_path_.size())) return slam_path_[index];
+  return std::nullopt;
+}
+
+std::optional<Pose2D> RosRobotSystem::registeredScanOdometry(int index) {
+  try {
+    const MapDirectory map(map_dir_);
+    if (index >= 0 && index < static_cast<int>(map.size())) return map.scans()[index].odom_pose;
+  } catch (const std::exception& e) {
+    ROS_WARN("cannot read the SLAM map directory %s: %s", map_dir_.c_str(), e.what());
+  }
+  return std::nullopt;
 }
 
 }  // namespace mission

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -64,6 +65,9 @@ class FakeSystem : public RobotSystem {
   std::function<void(int)> on_scan;               // called at every takeScan with the count so far
   std::string state_path;                         // checked at every scan: saved state has all scans
   int saved_scan_mismatches = 0;
+  bool report_odometry = false;                   // currentOdometry() answers (the base's odom topic)
+  int mesh_failures_left = 0;                     // buildMesh fails this many times (mesher killed)
+  int mesh_calls = 0;
 
   ScanResult takeScan(int planes) override {
     ScanResult r;
@@ -172,6 +176,12 @@ class FakeSystem : public RobotSystem {
   MeshResult buildMesh(const std::string& path) override {
     MeshResult r;
     r.available = true;
+    ++mesh_calls;
+    if (mesh_failures_left > 0) {
+      --mesh_failures_left;
+      r.message = "service mesher/build_mesh call failed (the node died or refused the request)";
+      return r;
+    }
     r.success = true;
     r.triangles = 42;
     r.file = path;
@@ -179,6 +189,9 @@ class FakeSystem : public RobotSystem {
   }
 
   std::optional<Pose2D> groundTruth() override { return truth; }
+  std::optional<Pose2D> currentOdometry() override {
+    return report_odometry ? std::optional<Pose2D>(odom) : std::nullopt;
+  }
   int registeredScanCount() override { return static_cast<int>(slam_poses.size()); }
   std::optional<Pose2D> registeredScanPose(int i) override {
     if (i < 0 || i >= static_cast<int>(slam_poses.size())) return std::nullopt;
@@ -191,6 +204,7 @@ MissionConfig config(const std::string& dir) {
   c.run_dir = dir;
   c.planes = 50;
   c.world = "fake_room";
+  c.retry_backoff_s = 0.01;
   return c;
 }
 
@@ -323,6 +337,154 @@ TEST(Mission, ResumesAfterTheMissionNodeDiesWithoutLosingOrRepeatingAScan) {
   for (size_t i = 0; i < s.scans.size(); ++i) EXPECT_EQ(s.scans[i].index, static_cast<int>(i));
 }
 
+TEST(Mission, ResumesFromTheBaseOdometryWhenItDiedWhileTheBaseMoved) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1.5, 0}, {1.5, 1.5}};
+  {
+    Mission first(config(dir.path()), sys, quiet, quiet);
+    sys.on_scan = [&first](int n) {
+      if (n == 2) first.abort();
+    };
+    EXPECT_EQ(first.run(), State::Aborted);
+  }
+  sys.on_scan = nullptr;
+  // The base carried out a motion the dead mission never heard the answer of.
+  sys.forward(0.4);
+  const Pose2D truth_after_motion = sys.truth;
+  sys.report_odometry = true;
+  Mission second(config(dir.path()), sys, quiet, quiet);
+  ASSERT_TRUE(second.loadSavedState());
+  const MissionState resumed = second.snapshot();
+  EXPECT_NEAR(resumed.odom_now.x, sys.odom.x, 1e-9);
+  EXPECT_NEAR(resumed.odom_now.y, sys.odom.y, 1e-9);
+  bool reported = false;
+  for (const auto& e : resumed.events) reported = reported || e.what.find("odometry moved by") != std::string::npos;
+  EXPECT_TRUE(reported);
+  // The estimate follows the robot: it is where the base's odometry says, not where the save said.
+  const Pose2D est = resumed.estimate();
+  EXPECT_NEAR(est.x, truth_after_motion.x, 0.05);
+  EXPECT_NEAR(est.y, truth_after_motion.y, 0.05);
+  EXPECT_EQ(second.run(), State::Done);
+  // Every target reached within the waypoint tolerance plus the fake's odometry drift.
+  EXPECT_NEAR(sys.truth.x, 1.5, 0.1);
+  EXPECT_NEAR(sys.truth.y, 1.5, 0.1);
+}
+
+TEST(Mission, AdoptsAScanSlamFinishedRegisteringAfterTheRestart) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {2, 1}, {1, 2}};
+  {
+    Mission first(config(dir.path()), sys, quiet, quiet);
+    sys.on_scan = [&first](int n) {
+      if (n == 2) first.abort();
+    };
+    EXPECT_EQ(first.run(), State::Aborted);
+  }
+  sys.on_scan = nullptr;
+  Mission second(config(dir.path()), sys, quiet, quiet);
+  ASSERT_TRUE(second.loadSavedState());
+  const size_t before = second.snapshot().scans.size();
+  ASSERT_EQ(before, sys.slam_poses.size());
+  // The registration the dead mission had asked for ends only now, after the restart.
+  sys.slam_poses.push_back(sys.truth);
+  EXPECT_EQ(second.run(), State::Done);
+  const MissionState s = second.snapshot();
+  ASSERT_EQ(s.scans.size(), sys.slam_poses.size());
+  for (size_t i = 0; i < s.scans.size(); ++i) EXPECT_EQ(s.scans[i].index, static_cast<int>(i));
+  bool adopted = false;
+  for (const auto& e : s.events) adopted = adopted || e.what == "adopted scan " + std::to_string(before) + " registered before a restart";
+  EXPECT_TRUE(adopted);
+}
+
+TEST(Mission, ARestartedMissionDrivesOnAlongTheSavedPath) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{2, 0}, {2, 2}};
+  sys.insert_intermediate = true;  // path: midpoint (scan) -> target (scan)
+  int plans_before_restart = 0;
+  {
+    Mission first(config(dir.path()), sys, quiet, quiet);
+    sys.on_scan = [&first](int n) {
+      if (n == 2) first.abort();  // killed while scanning at the midpoint of the first path
+    };
+    EXPECT_EQ(first.run(), State::Aborted);
+    plans_before_restart = first.snapshot().plans;
+  }
+  sys.on_scan = nullptr;
+  const MissionState saved = MissionState::load(dir.path() + "/mission_state.yaml");
+  ASSERT_EQ(saved.path.size(), 2u);
+  EXPECT_EQ(saved.path_next, 1);
+  EXPECT_NEAR(saved.path_target.x(), 2.0, 1e-9);
+  Mission second(config(dir.path()), sys, quiet, quiet);
+  ASSERT_TRUE(second.loadSavedState());
+  EXPECT_EQ(second.run(), State::Done);
+  const MissionState s = second.snapshot();
+  // The third scan is at the first path's target, reached without a new plan.
+  ASSERT_GE(s.scans.size(), 3u);
+  EXPECT_NEAR(s.scans[2].map_pose.x, 2.0, 0.1);
+  EXPECT_NEAR(s.scans[2].map_pose.y, 0.0, 0.1);
+  bool drove_on = false;
+  for (const auto& e : s.events) drove_on = drove_on || e.what.find("driving on along the saved path") == 0;
+  EXPECT_TRUE(drove_on);
+  EXPECT_EQ(plans_before_restart, 1);
+  EXPECT_TRUE(s.path.empty());
+}
+
+TEST(Mission, ControlRequestsThatDoNotApplyAreRefusedWithAReason) {
+  TempDir dir;
+  FakeSystem sys;
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  std::string why;
+  EXPECT_FALSE(m.resume(&why));
+  EXPECT_EQ(why, "the mission is not paused");
+  EXPECT_TRUE(m.pause(&why));
+  EXPECT_TRUE(m.paused());
+  EXPECT_FALSE(m.pause(&why));
+  EXPECT_EQ(why, "the mission is already paused");
+  EXPECT_TRUE(m.resume(&why));
+  EXPECT_FALSE(m.paused());
+  EXPECT_TRUE(m.abort(&why));
+  EXPECT_FALSE(m.abort(&why));
+  EXPECT_EQ(why, "the mission is already being aborted");
+  EXPECT_FALSE(m.pause(&why));
+  EXPECT_EQ(why, "the mission is being aborted");
+  EXPECT_FALSE(m.resume(&why));
+  EXPECT_EQ(why, "the mission is being aborted");
+  // A new run after an abort starts afresh.
+  sys.targets = {{1, 0}};
+  EXPECT_EQ(m.run(), State::Done);
+}
+
+TEST(Mission, RetriesTheMeshWhenTheMesherDiesDuringTheCall) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}};
+  sys.mesh_failures_left = 1;
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  EXPECT_EQ(sys.mesh_calls, 2);
+  bool written = false;
+  for (const auto& e : m.snapshot().events) written = written || e.what.find("mesh with 42 triangles") == 0;
+  EXPECT_TRUE(written);
+}
+
+TEST(Mission, PublishesEveryStateChange) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}};
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  std::vector<State> seen;
+  m.setStateListener([&] { seen.push_back(m.snapshot().state); });
+  EXPECT_EQ(m.run(), State::Done);
+  ASSERT_FALSE(seen.empty());
+  EXPECT_EQ(seen.front(), State::Scanning);
+  EXPECT_EQ(seen.back(), State::Done);
+  for (State s : {State::Registering, State::Planning, State::Driving, State::Meshing})
+    EXPECT_NE(std::find(seen.begin(), seen.end(), s), seen.end()) << toString(s);
+}
+
 TEST(Mission, AdoptsAScanSlamStoredWhenItsAnswerWasLost) {
   TempDir dir;
   FakeSystem sys;
@@ -400,6 +562,13 @@ TEST(Mission, BadConfigurationNamesTheParameter) {
     EXPECT_NE(std::string(e.what()).find("planes"), std::string::npos);
   }
   c.planes = 50;
+  c.retry_backoff_s = 61.0;
+  EXPECT_THROW(c.validate(), ConfigError);
+  c.retry_backoff_s = 1.0;
+  c.mesh_output = "/tmp/mesh.obj";
+  EXPECT_THROW(c.validate(), ConfigError);
+  c.mesh_output = "/tmp/mesh.stl";
+  EXPECT_NO_THROW(c.validate());
   c.run_dir.clear();
   EXPECT_THROW(c.validate(), ConfigError);
 }

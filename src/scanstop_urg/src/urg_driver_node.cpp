@@ -160,6 +160,8 @@ void UrgDriverNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("outlier share (all scans)",
              s.points_before_filter ? static_cast<double>(s.outliers_removed) / s.points_before_filter : 0.0);
   status.add("last error", s.last_error);
+  std::lock_guard<std::mutex> lock(odom_mutex_);
+  status.add("base", base_motion_.empty() ? std::string("standing still (or no odom)") : base_motion_);
 }
 
 bool UrgDriverNode::odomPose(geometry_msgs::PoseStamped* pose, std::string* error) {

@@ -325,6 +325,8 @@ TEST(RotatingUrgDriver, ScanIsRefusedWhileTheBaseMovesAndDiscardedWhenItMovedDur
   EXPECT_FALSE(srv.response.success);
   EXPECT_NE(srv.response.message.find("the base is moving"), std::string::npos) << srv.response.message;
   EXPECT_NE(srv.response.message.find("v = 0.2 m/s"), std::string::npos) << srv.response.message;
+  ros::WallDuration(0.5).sleep();  // diagnostics every 0.2 s
+  EXPECT_NE(diag("base").find("the base is moving"), std::string::npos) << diag("base");
   // Turning on the spot: refused.
   publishTwist(pub, 0.0, -0.35);
   srv = scan(50);
@@ -333,6 +335,8 @@ TEST(RotatingUrgDriver, ScanIsRefusedWhileTheBaseMovesAndDiscardedWhenItMovedDur
 
   // Standing: the scan works.
   publishTwist(pub, 0.0, 0.0);
+  ros::WallDuration(0.5).sleep();
+  EXPECT_EQ(diag("base"), "standing still (or no odom)");
   srv = scan(50);
   EXPECT_TRUE(srv.response.success) << srv.response.message;
 

@@ -18,12 +18,19 @@ PointCloud readCloud(const std::string& path);
 /// Writes a cloud in the format given by the extension (.pcd binary, .ply binary, .xyz).
 void writeCloud(const std::string& path, const PointCloud& cloud);
 
+/// Reads a PCD file (ascii, binary, binary_compressed; any numeric field types). The header is checked
+/// before PCL reads the file: entries, their order and consistency, and that the data section is complete.
 PointCloud readPcd(const std::string& path);
+/// The header and size check of readPcd alone (cheap: no point is read). Returns an empty string when
+/// the file passes, else the problem ("empty file", "truncated PCD: ...", "not a valid PCD file: ...").
+std::string pcdFileProblem(const std::string& path);
 void writePcd(const std::string& path, const PointCloud& cloud);
 
 /// Reads a PLY file's vertices (x y z, optional nx ny nz) and faces (vertex_indices or vertex_index).
 /// Other elements and properties are skipped. ASCII, binary_little_endian and binary_big_endian.
 TriangleMesh readPly(const std::string& path);
+/// Parses PLY content held in memory; `name` is used in error messages.
+TriangleMesh parsePly(const std::string& data, const std::string& name);
 /// Reads a PLY file as a cloud (its vertices and normals; faces ignored).
 PointCloud readPlyCloud(const std::string& path);
 /// Writes vertices (+ normals when present) and faces (when present) as PLY.
@@ -32,6 +39,8 @@ void writePlyCloud(const std::string& path, const PointCloud& cloud, bool binary
 
 /// XYZ text: one point per line, "x y z" or "x y z nx ny nz"; '#' starts a comment.
 PointCloud readXyz(const std::string& path);
+/// Parses XYZ text held in memory; `name` is used in error messages.
+PointCloud parseXyz(const std::string& data, const std::string& name);
 void writeXyz(const std::string& path, const PointCloud& cloud);
 
 /// Reads a mesh by extension: .stl (soup) or .ply (indexed).

@@ -9,6 +9,14 @@ namespace scanstop {
 /// A reader never sees a half-written file. Throws IoError naming the path.
 void writeFileAtomic(const std::string& path, const std::string& data);
 
+/// A temporary file name next to path, unique per process and call (path + ".tmp.<pid>.<n>"), for
+/// writers that produce the file themselves and then call commitTemporaryFile.
+std::string temporaryPathFor(const std::string& path);
+
+/// Makes a finished temporary file the file at path: fsync, rename over path, fsync the directory (so
+/// the rename survives a power loss). Removes tmp and throws IoError naming path on failure.
+void commitTemporaryFile(const std::string& tmp, const std::string& path);
+
 /// Reads a whole file; throws IoError ("no such file", "cannot read") naming the path.
 std::string readFile(const std::string& path);
 

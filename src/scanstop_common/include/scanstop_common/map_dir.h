@@ -31,36 +31,63 @@ struct MapScanInfo {
   double overlap = 0.0;
 };
 
-/// Reads and appends to a map directory. Files are written atomically; loading validates each line
-/// and each scan file and reports problems by file name.
+/// Something wrong in a map directory found while loading it: the file and what was wrong.
+struct MapProblem {
+  std::string path;     ///< the bad file (poses.csv or a scan file), absolute when the directory is
+  std::string problem;  ///< what was wrong and what the loader did, e.g. "line 4: ...; line skipped"
+  std::string message() const { return path + ": " + problem; }
+};
+
+/// Reads and appends to a map directory. Files are written atomically (temporary file, fsync, rename).
+/// Loading validates each line of poses.csv and each scan file: a bad line or a missing, empty,
+/// truncated or corrupt scan file is reported in problems() and that scan is skipped; all other scans
+/// are kept. Nothing in a corrupt directory makes the loader throw or crash.
 class MapDirectory {
  public:
-  /// Opens (creating it when missing) the directory; loads an existing poses.csv.
-  /// Throws IoError naming the file and line when poses.csv is corrupt.
+  /// Opens (creating it when missing) the directory; loads an existing poses.csv, skipping and
+  /// reporting bad lines and scans whose file fails the check (problems()). Throws IoError only when
+  /// the directory cannot be created or poses.csv exists but cannot be read.
   explicit MapDirectory(const std::string& dir);
 
   const std::string& dir() const { return dir_; }
+  /// The loadable scans in index order. Indices have gaps where scans were skipped.
   const std::vector<MapScanInfo>& scans() const { return scans_; }
   size_t size() const { return scans_.size(); }
+  /// What was wrong with the directory when it was loaded (empty for a healthy map).
+  const std::vector<MapProblem>& problems() const { return problems_; }
+  /// The index the next appended scan must have: one past every index poses.csv mentions, also on
+  /// skipped lines and for skipped scans, and whose scans/scan_NNNN.pcd no line names, so the file of a
+  /// listed scan is never overwritten. Scan files
+  /// that poses.csv does not list (an append interrupted before poses.csv was written) are reported and
+  /// replaced by the scan that gets their index. Equals size() for a healthy map.
+  uint32_t nextIndex() const { return next_index_; }
 
   /// Writes the cloud (base_link frame; NaN points dropped) as scans/scan_NNNN.pcd, then poses.csv.
-  /// info.index must equal size(); info.file is filled in. Throws IoError.
+  /// info.index must equal nextIndex(); info.file is filled in. Throws IoError. Rewriting poses.csv
+  /// drops lines that could not be parsed and keeps the lines of scans whose file was bad.
   void append(MapScanInfo info, const PointCloud& cloud_base);
-  /// Replaces the poses of existing scans (e.g. after a re-registration) and rewrites poses.csv.
+  /// Replaces the poses of the loaded scan with info.index (e.g. after a re-registration) and rewrites
+  /// poses.csv. Throws IoError when there is no such scan.
   void updateInfo(const MapScanInfo& info);
 
-  /// Loads scan i in the base_link frame. Throws IoError naming the file.
+  /// Loads the scan at position i of scans() in the base_link frame. Throws IoError naming the file.
   PointCloud loadScan(size_t i) const;
-  /// Loads scan i transformed into the map frame.
+  /// Loads the scan at position i transformed into the map frame.
   PointCloud loadScanInMap(size_t i) const;
 
   /// Absolute path of poses.csv.
   std::string posesPath() const { return dir_ + "/poses.csv"; }
 
  private:
+  void load();
+  void setNextIndex(uint32_t candidate);
   void writePoses() const;
   std::string dir_;
   std::vector<MapScanInfo> scans_;
+  std::vector<MapScanInfo> skipped_;  ///< parsed lines whose scan file was bad (kept in poses.csv)
+  std::vector<MapProblem> problems_;
+  std::vector<std::string> named_files_;  ///< every scan file a line of poses.csv names
+  uint32_t next_index_ = 0;
 };
 
 /// Transforms every point of a cloud (NaN stays NaN).

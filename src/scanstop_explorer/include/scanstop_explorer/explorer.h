@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -43,8 +44,10 @@ class Explorer {
   /// body and the scanner's near-range noise). Each index is used once: returns false (and changes nothing) for an index
   /// that was added before.
   bool addScan(uint32_t index, const Pose2D& T_map_base, const std::vector<Eigen::Vector3f>& points_map);
-  /// Adds every scan of a map directory that is not in yet. Returns how many were added.
-  size_t loadMapDirectory(const MapDirectory& dir);
+  /// Adds every scan of a map directory that is not in yet. Returns how many were added. A scan
+  /// file that cannot be read (missing, truncated, corrupt) is skipped and its problem, naming the
+  /// file, appended to `problems` (when given); it is tried again on the next call.
+  size_t loadMapDirectory(const MapDirectory& dir, std::vector<std::string>* problems = nullptr);
 
   /// One planning step from the robot's map-frame pose; updates the blacklist (a target planned
   /// before that the robot neither reached nor got closer to max_failed_attempts times).

@@ -22,7 +22,20 @@ struct NodeConfig {
   std::string map_dir;           ///< map directory to load at start and before each plan ("" = none)
   std::string run_dir;           ///< where per-step images go ("" = none)
   int image_scale = 2;           ///< image pixels per cell, [1, 16]
+  /// Request checks: a map_pose or unreachable point farther than this from the map origin is
+  /// refused as absurd [m], [1, 1e6]
+  double max_coordinate_m = 1000.0;
+  /// a registered scan with a point farther than this from its pose is dropped (it would blow up
+  /// the floor grid) [m], [0.1, 1000]
+  double max_point_distance_m = 100.0;
+  int max_unreachable = 10000;   ///< most unreachable points one request may carry, [0, 1e6]
 };
+
+/// Why a plan_next request cannot be served, or "" when it can: map_pose in another frame than
+/// frame_id (empty = frame_id), a non-finite position or orientation, a non-unit quaternion, a
+/// coordinate beyond max_coordinate_m, too many or non-finite or absurd unreachable points.
+/// Checked before anything is applied (the blacklist, the map directory, the step counter).
+std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, const NodeConfig& node_config);
 
 /// Reads ~parameters into the configs; throws ConfigError naming the bad parameter.
 void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& config, NodeConfig& node_config);

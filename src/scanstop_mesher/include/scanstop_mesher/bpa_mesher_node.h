@@ -23,6 +23,10 @@ struct MesherNodeConfig {
   std::string map_dir;                 ///< map directory meshed when input_path is empty
   std::string frame_id = "map";        ///< frame of the map, the meshes and the markers
   std::string default_output;          ///< file written when output_path is empty ("" = required)
+  /// The only directory meshes may be written to (relative output paths are taken relative to it);
+  /// "" = the directory of default_output, else the parent of map_dir (the run directory)
+  std::string output_dir;
+  double max_coordinate_m = 10000.0;   ///< input points beyond this (any axis) are refused as absurd [m], [1, 1e6]
   double map_voxel_m = 0.01;           ///< voxel [m] for the map when the request gives 0 (0 = none)
   double normal_radius_m = 0.0;        ///< [m]; 0 = 3 x point spacing
   int normal_min_neighbors = 5;
@@ -35,6 +39,8 @@ struct MesherNodeConfig {
   double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)
   double map_poll_s = 2.0;             ///< period [s] of checking map_dir and load_mesh for changes
   void validate() const;
+  /// output_dir, or the directory it defaults to ("" when there is none).
+  std::string allowedOutputDir() const;
 };
 
 class BpaMesherNode {

@@ -26,8 +26,20 @@ struct ScanPoints {
 };
 
 /// The scans of a map directory (scanstop_common/map_dir.h) in the map frame; each point's view is
-/// its scan's scanner position, map_pose * sensor_origin. Throws IoError naming the bad file.
-ScanPoints loadMapDirectory(const std::string& dir);
+/// its scan's scanner position, map_pose * sensor_origin. Throws IoError naming the bad file; with
+/// `skipped` given, a scan file that cannot be read is skipped instead and its problem (naming the
+/// file) appended there (IoError still when no scan is left).
+ScanPoints loadMapDirectory(const std::string& dir, std::vector<std::string>* skipped = nullptr);
+
+/// Where a mesh may be written: `path` (relative ones are taken relative to allowed_dir) resolved
+/// to an absolute path whose directory exists and lies inside allowed_dir (after resolving '..',
+/// '.' and symbolic links), ending in .stl or .ply. Throws ConfigError naming the path and what is
+/// wrong (outside the directory, no such directory, a directory, wrong extension, empty).
+std::string resolveOutputPath(const std::string& path, const std::string& allowed_dir);
+
+/// Why these points cannot be meshed as given, or "": none, or a coordinate beyond max_abs_m
+/// (absurd: it would blow up the neighbour grid). Names the first bad point.
+std::string pointsProblem(const ScanPoints& points, double max_abs_m);
 
 /// A cloud's finite points; its normals when it has them, else the viewpoint for all points.
 ScanPoints fromCloud(const PointCloud& cloud, const Eigen::Vector3f& viewpoint);
@@ -53,8 +65,8 @@ size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors, bool
 
 /// Pipeline settings.
 struct MesherConfig {
-  std::vector<double> radii_m;       ///< increasing ball radii [m]; empty = automaticRadii(spacing)
-  double voxel_m = 0.0;              ///< voxel edge for downsampling [m]; 0 = none
+  std::vector<double> radii_m;       ///< increasing ball radii [m], each in (0, 10], at most 32; empty = automaticRadii(spacing)
+  double voxel_m = 0.0;              ///< voxel edge for downsampling [m], [0, 10]; 0 = none
   double normal_radius_m = 0.0;      ///< neighbourhood for normal estimation [m]; 0 = 3 x spacing
   int normal_min_neighbors = 5;      ///< neighbours a normal needs
   bool smooth = true;                ///< move points onto their local plane when estimating normals

@@ -28,10 +28,16 @@ struct MissionConfig {
   /// at least this long [m]; 0 = at every landmark the explorer marks (the thesis). The target is
   /// always scanned.
   double min_scan_travel_m = 0.0;
-  int max_step_retries = 2;              ///< retries of a failed scan, registration or plan
+  int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
+  /// Wait before retry n (n = 1, 2, ...) of a failed step: n times this [s]. A node that died
+  /// mid-call is usually back (respawn) within a few seconds.
+  double retry_backoff_s = 1.0;
   int max_consecutive_failed_cycles = 5; ///< cycles in a row that make no progress before giving up
   int max_cycles = 1000;                 ///< hard bound on plan-drive cycles
   bool build_mesh = true;                ///< ask the mesher for a mesh at the end (if one runs)
+  /// Where the mesher is asked to write the mesh (a path on the mesher's host, .ply or .stl);
+  /// empty = the mesher's own default_output (a mesher on another host).
+  std::string mesh_output;
   std::string run_dir;                   ///< where the state, the log and the report go
   std::string world;                     ///< world name for the report (simulation)
 
@@ -55,9 +61,16 @@ class Mission {
   /// Runs the cycle to its end; returns the final state (Done, Aborted or Failed).
   State run();
 
-  void pause();
-  void resume();
-  void abort();
+  /// Control requests; each answers false (and changes nothing) when it does not apply, with the
+  /// reason in `why`: pause while already paused or finished, resume while not paused, abort after
+  /// the end.
+  bool pause(std::string* why = nullptr);
+  bool resume(std::string* why = nullptr);
+  bool abort(std::string* why = nullptr);
+  bool paused() const;
+
+  /// Called (outside the lock) after every state change, e.g. to publish the status at once.
+  void setStateListener(std::function<void()> listener) { state_listener_ = std::move(listener); }
 
   /// A copy of the current state (thread-safe).
   MissionState snapshot() const;
@@ -68,9 +81,15 @@ class Mission {
   enum class Control { Run, Pause, Abort };
 
   bool scanAndRegister();
+  /// Adopts the scans SLAM holds beyond the last one the mission knows, up to index `upto`
+  /// (exclusive; -1 = all): registered by a mission that died before it could save them, or
+  /// still being registered when this mission restarted. Caller holds no lock.
+  void adoptScansRegisteredElsewhere(int upto = -1);
   bool driveTo(const Eigen::Vector2d& waypoint, bool& collision);
   bool checkControl();  ///< waits while paused; false when aborted
+  void backoff(int attempt);  ///< waits attempt * retry_backoff_s (returns early on abort)
   void setState(State s);
+  void notifyState();
   void event(const std::string& what, bool warning = false);
   void save();
   double elapsed() const;
@@ -86,6 +105,7 @@ class Mission {
   double elapsed_at_start_ = 0.0;
   std::chrono::steady_clock::time_point started_;
   double pending_plan_wall_s_ = 0.0;
+  std::function<void()> state_listener_;
 };
 
 }  // namespace mission

@@ -56,6 +56,12 @@ struct MissionState {
   Pose2D last_map_pose;                      ///< corrected pose of the last registered scan (map)
   Pose2D odom_at_last_scan;                  ///< odometry pose of the last registered scan
   Pose2D odom_now;                           ///< odometry pose after the last step
+  // The path being driven, so that a restarted mission drives on along it instead of replanning.
+  std::vector<Eigen::Vector2d> path;         ///< waypoints of the current plan (map frame); empty: none
+  std::vector<bool> path_scan_at;            ///< the plan's scan flags, one per waypoint
+  Eigen::Vector2d path_target = Eigen::Vector2d::Zero();  ///< the current plan's target
+  int path_next = 0;                         ///< index of the waypoint being driven to
+  int path_scan_mark = -1;                   ///< scans.size() when the scan at path_next began; -1: none yet
 
   /// The current pose estimate in the map frame.
   Pose2D estimate() const { return last_map_pose * odom_at_last_scan.inverse() * odom_now; }

@@ -82,6 +82,12 @@ class RobotSystem {
   virtual int registeredScanCount() = 0;
   /// The pose SLAM stored for scan `index` (after a lost response); nullopt when unknown.
   virtual std::optional<Pose2D> registeredScanPose(int index) = 0;
+  /// The odometry pose SLAM stored with scan `index`; nullopt when unknown (the caller then assumes
+  /// the robot has not moved since).
+  virtual std::optional<Pose2D> registeredScanOdometry(int /*index*/) { return std::nullopt; }
+  /// The base's odometry pose now (after a restart of the mission, which may have died while a
+  /// motion it had asked for was carried out); nullopt when unknown.
+  virtual std::optional<Pose2D> currentOdometry() { return std::nullopt; }
 };
 
 }  // namespace mission

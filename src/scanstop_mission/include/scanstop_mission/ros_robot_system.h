@@ -3,11 +3,13 @@
 /// its answer, and reports a failure in words instead of hanging.
 
 #include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
 #include <ros/ros.h>
 
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "scanstop_mission/robot_system.h"
 
@@ -39,17 +41,25 @@ class RosRobotSystem : public RobotSystem {
   std::optional<Pose2D> groundTruth() override;
   int registeredScanCount() override;
   std::optional<Pose2D> registeredScanPose(int index) override;
+  std::optional<Pose2D> registeredScanOdometry(int index) override;
+  /// The latest `odom` message (the base publishes it latched after every motion), waited for up to
+  /// wait_for_service_s.
+  std::optional<Pose2D> currentOdometry() override;
 
  private:
   void onGroundTruth(const nav_msgs::Odometry::ConstPtr& msg);
+  void onOdometry(const nav_msgs::Odometry::ConstPtr& msg);
+  void onSlamPath(const nav_msgs::Path::ConstPtr& msg);
 
   ros::NodeHandle nh_;
   CallTimeouts timeouts_;
   std::string map_dir_;
   ros::ServiceClient take_scan_, register_scan_, rotate_, forward_, plan_next_, build_mesh_;
-  ros::Subscriber ground_truth_sub_;
+  ros::Subscriber ground_truth_sub_, odom_sub_, slam_path_sub_;
+  std::vector<Pose2D> slam_path_;  ///< scan poses from slam/path (latched): the map when map_dir is on another host
   std::mutex mutex_;
-  std::optional<Pose2D> ground_truth_;
+  std::optional<Pose2D> ground_truth_, odom_;
+  bool mesher_seen_ = false;  ///< mesher/build_mesh existed at some point: wait for it (respawn) at the end
 };
 
 }  // namespace mission
