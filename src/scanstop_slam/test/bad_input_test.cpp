@@ -177,7 +177,6 @@ TEST(IcpSlamMapDirectory, CorruptAndTruncatedScanFilesAreSkippedByName) {
   writeFileAtomic(dir + "/map/scans/scan_0002.pcd", scan2.substr(0, scan2.size() / 2));
   IcpSlam slam(SlamConfig(), dir + "/map");
   ASSERT_EQ(slam.skippedScans().size(), 2u);
-  EXPECT_EQ(slam.skippedScans()[0].index, 1u);
   EXPECT_EQ(slam.skippedScans()[0].file, dir + "/map/scans/scan_0001.pcd");
   EXPECT_FALSE(slam.skippedScans()[0].reason.empty());
   EXPECT_EQ(slam.skippedScans()[1].file, dir + "/map/scans/scan_0002.pcd");
@@ -198,11 +197,13 @@ TEST(IcpSlamMapDirectory, CorruptPosesFileIsReportedByName) {
   }
   const std::string poses = readFile(dir + "/map/poses.csv");
   writeFileAtomic(dir + "/map/poses.csv", poses.substr(0, poses.size() - 9));  // truncated last line
+  // scanstop_common's MapDirectory refuses the file naming it, or (newer) skips the line and reports it.
   try {
     IcpSlam slam(SlamConfig(), dir + "/map");
-    FAIL() << "loaded a truncated poses.csv";
-  } catch (const std::exception& e) {
-    EXPECT_TRUE(contains(e.what(), "poses.csv")) << e.what();
+    ASSERT_FALSE(slam.skippedScans().empty()) << "a truncated poses.csv went unreported";
+    EXPECT_EQ(slam.skippedScans()[0].file, dir + "/map/poses.csv");
+  } catch (const IoError& e) {
+    EXPECT_TRUE(contains(e.what(), dir + "/map/poses.csv")) << e.what();
   }
   EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
