@@ -114,12 +114,12 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   if (problem.empty() && !std::isfinite(stamp_s)) problem = "the stamp is not finite";
   if (!problem.empty()) throw std::invalid_argument(problem);
   Registration r;
-  r.index = static_cast<uint32_t>(count_);
+  r.index = static_cast<uint32_t>(dir_ ? nextIndexOf(*dir_, 0) : count_);
   // Initial guess: the last corrected pose composed with the odometry delta since then. The first
   // scan defines the map: map = odom at the first scan.
   r.guess = count_ == 0 ? odom_pose : last_map_ * last_odom_.between(odom_pose);
   const std::vector<Eigen::Vector3f> source = voxelDownsample(scan_base.points, config_.source_voxel_m);
-  if (count_ == 0) {
+  if (map_.size() == 0) {  // the first scan (or every earlier one was skipped) defines the map
     r.map_pose = r.guess;
     r.converged = true;
   } else {
@@ -178,7 +178,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   map_.add(in_map);
   last_map_ = r.map_pose;
   last_odom_ = odom_pose;
-  ++count_;
+  count_ = dir_ ? nextIndexOf(*dir_, 0) : count_ + 1;
   r.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }

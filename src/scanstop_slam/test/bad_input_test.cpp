@@ -189,6 +189,25 @@ TEST(IcpSlamMapDirectory, CorruptAndTruncatedScanFilesAreSkippedByName) {
   EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
 
+TEST(IcpSlamMapDirectory, WhenEveryScanFileIsCorruptTheNextScanStartsTheMapAtTheNextIndex) {
+  const std::string dir = tempDir();
+  {
+    IcpSlam slam(SlamConfig(), dir + "/map");
+    for (int i = 0; i < 3; ++i)
+      slam.registerScan(roomScan(), Pose2D(0.02 * i, 0, 0), Eigen::Vector3d(0, 0, 0.45), i * 10.0);
+  }
+  for (int i = 0; i < 3; ++i) writeFileAtomic(dir + "/map/scans/scan_000" + std::to_string(i) + ".pcd", "garbage\n");
+  IcpSlam slam(SlamConfig(), dir + "/map");
+  EXPECT_EQ(slam.skippedScans().size(), 3u);
+  EXPECT_EQ(slam.map().size(), 0u);
+  const Registration r = slam.registerScan(roomScan(), Pose2D(0.05, 0, 0), Eigen::Vector3d(0, 0, 0.45), 40.0);
+  EXPECT_EQ(r.index, 3u) << "no index of a listed scan is reused";
+  EXPECT_TRUE(r.converged);
+  EXPECT_NEAR(r.map_pose.x, 0.05, 1e-9);
+  EXPECT_GT(slam.map().size(), 0u);
+  EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
+}
+
 TEST(IcpSlamMapDirectory, CorruptPosesFileIsReportedByName) {
   const std::string dir = tempDir();
   {
