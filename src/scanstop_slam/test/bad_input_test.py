@@ -218,10 +218,8 @@ class SlamBadInput(unittest.TestCase):
             proc.send_signal(signal.SIGINT)  # its stdout (INFO) is block-buffered into the file until it exits
             proc.wait(15)
             text = open(log).read()
-            self.assertIn('skipped scan 1 of the map directory: ' + os.path.join(resumed_dir, 'scans', 'scan_0001.pcd'),
-                          text, text)
-            self.assertIn('skipped scan 2 of the map directory: ' + os.path.join(resumed_dir, 'scans', 'scan_0002.pcd'),
-                          text, text)
+            for f in ('scan_0001.pcd', 'scan_0002.pcd'):
+                self.assertIn('map directory problem, skipped: ' + os.path.join(resumed_dir, 'scans', f), text, text)
             self.assertIn('with %d scans (2 skipped' % n, text, text)
             self.assertLess(abs(r.map_pose.pose.position.x), 0.02)  # the room is where the kept scans put it
         finally:

@@ -38,11 +38,11 @@ struct SlamConfig {
 /// point farther than max_point_distance_m from base_link. Names the first bad point's index.
 std::string scanProblem(const PointCloud& scan_base, double max_point_distance_m);
 
-/// A scan of the map directory that could not be loaded at start (skipped, the map goes on without it).
+/// A problem of the map directory found at start: a scan file that could not be loaded (skipped,
+/// the map goes on without it) or a bad poses.csv line.
 struct SkippedScan {
-  uint32_t index = 0;
-  std::string file;    ///< path of the scan file
-  std::string reason;  ///< the loader's error
+  std::string file;    ///< path of the bad file
+  std::string reason;  ///< what was wrong (the loader's error)
 };
 
 /// One registered scan.
@@ -63,8 +63,8 @@ class IcpSlam {
  public:
   /// map_dir may be empty (nothing persisted); otherwise its scans are loaded (resume). A scan file
   /// that cannot be read (missing, truncated, corrupt) is skipped and listed in skippedScans(); its
-  /// poses.csv entry stays, so indices and the trajectory are kept. Throws IoError naming poses.csv
-  /// when that is corrupt (scanstop_common's MapDirectory refuses it as a whole).
+  /// poses.csv entry stays, so indices and the trajectory are kept. A corrupt poses.csv: IoError
+  /// naming it from scanstop_common's MapDirectory, or (once it skips bad lines) its report.
   IcpSlam(const SlamConfig& config, const std::string& map_dir = "");
 
   /// Registers a scan given in base_link (NaN points ignored) taken at odom_pose; sensor_origin
@@ -75,6 +75,7 @@ class IcpSlam {
   Registration registerScan(const PointCloud& scan_base, const Pose2D& odom_pose,
                             const Eigen::Vector3d& sensor_origin = Eigen::Vector3d::Zero(), double stamp_s = 0.0);
 
+  /// Scans in the map including skipped ones: the index the next scan gets.
   size_t scanCount() const { return count_; }
   const VoxelMap& map() const { return map_; }
   const Pose2D& lastMapPose() const { return last_map_; }
