@@ -8,13 +8,13 @@ seed 7) twice with fresh nodes: once without faults, once with a seeded random s
   explorer_node   during a plan (explorer/plan_next),
   mission_node    while it waits for a registration (its answer is lost; the scan is stored),
   bpa_mesher_node during the final mesh (mesher/build_mesh),
+  sim_node        during a scan (scanner/take_scan; it resumes from its state file: same pose,
+                  odometry, clock and random sequence),
 each at a random moment inside the call (a random share of the same call's duration in the
 fault-free run) and restarts it 0.2 s later, as roslaunch's respawn does. The faulty run must end
 DONE with every scan exactly once in the mission state and the SLAM map, a mesh, and every scan
 pose within ICP tolerance of the fault-free run's.
 
-sim_node is not killed: it keeps the simulated robot's pose and odometry in memory, so a restarted
-sim_node puts the robot back at its start pose (a teleport no real robot does); see TWO_HOSTS.md.
 """
 import math
 import os
@@ -80,7 +80,9 @@ class MissionChaos(unittest.TestCase):
     def run_once(self, name, faults=()):
         run_dir = tempfile.mkdtemp(prefix="scanstop_chaos_%s_" % name)
         self.dirs.append(run_dir)
-        system = System(run_dir, planes=50, budget=BUDGET, seed=7)
+        # Scans take a tenth of their modelled time (5 s at 50 planes) on the wall clock, so that a
+        # kill of sim_node lands inside scanner/take_scan.
+        system = System(run_dir, planes=50, budget=BUDGET, seed=7, sim_args=["_scan_time_scale:=0.1"])
         self.systems.append(system)
         system.start("sim")
         rospy.wait_for_service("scanner/take_scan", timeout=60)
@@ -142,12 +144,16 @@ class MissionChaos(unittest.TestCase):
             Fault("explorer", "PLANNING", rng.choice([2, 3]), rng.uniform(0.2, 0.6), r"planning failed \(attempt"),
             Fault("mission", "REGISTERING", rng.choice([3, 4]), rng.uniform(0.2, 0.6), None),
             Fault("mesher", "MESHING", 0, rng.uniform(0.2, 0.6), r"meshing failed \(attempt"),
+            Fault("sim", "SCANNING", rng.choice([4, 5]), rng.uniform(0.2, 0.6), r"scan failed \(attempt"),
         ]
+        scan_s = [b[0] - a[0] for a, b in zip(ref_events, ref_events[1:]) if a[1] == "SCANNING" and a[2] >= 1]
         for f in faults:
             if f.state == "REGISTERING":
                 f.delay = f.share * min(reg[1:])
             elif f.state == "PLANNING":
                 f.delay = f.share * min(plan)
+            elif f.state == "SCANNING":
+                f.delay = f.share * min(scan_s)
             else:
                 f.delay = f.share * mesh_s
         print("seed %d: %r" % (SEED, faults))

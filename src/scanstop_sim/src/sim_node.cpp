@@ -7,11 +7,13 @@
 #include <visualization_msgs/Marker.h>
 
 #include <cmath>
+#include <fstream>
 #include <utility>
 #include <vector>
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_sim/world_builder.h"
@@ -99,6 +101,10 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   if (!(motion_time_scale_ >= 0.0 && motion_time_scale_ <= 10.0))
     throw ConfigError("parameter '" + pnh.resolveName("motion_time_scale") + "' = " + std::to_string(motion_time_scale_) +
                       " is out of range [0, 10]");
+  ros_params::optional(pnh, "scan_time_scale", scan_time_scale_);
+  if (!(scan_time_scale_ >= 0.0 && scan_time_scale_ <= 10.0))
+    throw ConfigError("parameter '" + pnh.resolveName("scan_time_scale") + "' = " + std::to_string(scan_time_scale_) +
+                      " is out of range [0, 10]");
 
   std::string start_text;
   ros_params::optional(pnh, "start_pose", start_text);
@@ -139,6 +145,19 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   }
   ROS_INFO("sim_node: %s (%zu triangles, %zu floor), start %s, profile %s, seed %d", world_path.c_str(),
            sim_->world().mesh().faces.size(), sim_->world().floorTriangles(), start.toString().c_str(), profile.c_str(), seed);
+  // A restarted sim_node continues the simulation of the one that died (pose, odometry, clock,
+  // random sequence): a real robot does not teleport back to its start when its driver restarts.
+  ros_params::optional(pnh, "state_file", state_file_);
+  if (!state_file_.empty() && std::ifstream(state_file_).good()) {
+    try {
+      sim_->restoreState(readFile(state_file_));
+      ROS_INFO("sim_node: resumed the simulation from %s: robot at %s (world), odometry %s, clock %.1f s",
+               state_file_.c_str(), sim_->trueInWorld().toString().c_str(), sim_->odometry().toString().c_str(),
+               sim_->clock());
+    } catch (const std::exception& e) {
+      ROS_ERROR("sim_node: ignoring the state file %s (%s): starting at the start pose", state_file_.c_str(), e.what());
+    }
+  }
 
   if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10, true);
@@ -170,7 +189,17 @@ void SimNode::onClockTimer(const ros::WallTimerEvent&) {
   clock_pub_.publish(clock);
 }
 
+void SimNode::persistState() {
+  if (state_file_.empty()) return;
+  try {
+    writeFileAtomic(state_file_, sim_->saveState());
+  } catch (const std::exception& e) {
+    ROS_ERROR_THROTTLE(10.0, "sim_node: cannot save the simulation state: %s", e.what());
+  }
+}
+
 void SimNode::publishState() {
+  persistState();
   const ros::Time stamp = now();
   if (publish_clock_) {
     rosgraph_msgs::Clock clock;
@@ -259,6 +288,9 @@ bool SimNode::onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::T
   progress_pub_.publish(progress);
 
   const ScanOutput scan = sim_->scan(req.planes);
+  // With scan_time_scale > 0 the scan takes that share of its modelled time on the wall clock; the
+  // state is persisted after it, so a sim_node killed meanwhile takes the same scan again.
+  if (scan_time_scale_ > 0.0) ros::WallDuration(scan.duration_s * scan_time_scale_).sleep();
   const ros::Time stamp = now();
   res.cloud = ros_conv::toMsg(scan.cloud, base_frame_, stamp);
   res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, stamp);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include "scanstop_common/config.h"
@@ -87,6 +88,91 @@ void Simulator::reset(const Pose2D& start_in_world, int64_t seed) {
     rng_.seed(config_.seed);
     scan_counter_ = 0;
   }
+}
+
+std::string Simulator::saveState() const {
+  std::ostringstream out;
+  out.precision(17);
+  const auto pose = [&](const char* name, const Pose2D& p) { out << name << ' ' << p.x << ' ' << p.y << ' ' << p.yaw << '\n'; };
+  out << "scanstop_sim_state 1\n";
+  out << "world " << world_.name() << '\n';
+  pose("start", start_);
+  pose("true", true_world_);
+  pose("odom", odom_);
+  out << "clock " << clock_s_ << '\n';
+  out << "scan_counter " << scan_counter_ << '\n';
+  out << "seed " << config_.seed << '\n';
+  out << "rng " << rng_ << '\n';
+  out << "end\n";
+  return out.str();
+}
+
+void Simulator::restoreState(const std::string& text) {
+  std::istringstream in(text);
+  std::string line;
+  if (!std::getline(in, line) || line != "scanstop_sim_state 1")
+    throw std::invalid_argument("not a sim_node state (first line '" + line.substr(0, 40) + "', expected 'scanstop_sim_state 1')");
+  Pose2D start, truth, odom;
+  double clock = -1.0;
+  uint64_t counter = 0, seed = 0;
+  std::mt19937_64 rng;
+  std::string world;
+  bool have[8] = {false, false, false, false, false, false, false, false};
+  bool ended = false;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string key;
+    ls >> key;
+    const auto readPose = [&](Pose2D& p, int slot) {
+      if (!(ls >> p.x >> p.y >> p.yaw) || !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.yaw))
+        throw std::invalid_argument("field '" + key + "' is not three finite numbers: '" + line.substr(0, 80) + "'");
+      have[slot] = true;
+    };
+    if (key == "world") {
+      std::getline(ls >> std::ws, world);
+      have[0] = true;
+    } else if (key == "start") {
+      readPose(start, 1);
+    } else if (key == "true") {
+      readPose(truth, 2);
+    } else if (key == "odom") {
+      readPose(odom, 3);
+    } else if (key == "clock") {
+      if (!(ls >> clock) || !std::isfinite(clock) || clock < 0.0) throw std::invalid_argument("field 'clock' is not a time >= 0");
+      have[4] = true;
+    } else if (key == "scan_counter") {
+      if (!(ls >> counter)) throw std::invalid_argument("field 'scan_counter' is not a count");
+      have[5] = true;
+    } else if (key == "seed") {
+      if (!(ls >> seed)) throw std::invalid_argument("field 'seed' is not a number");
+      have[6] = true;
+    } else if (key == "rng") {
+      if (!(ls >> rng)) throw std::invalid_argument("field 'rng' is not a random generator state of 312 numbers (truncated file?)");
+      have[7] = true;
+    } else if (key == "end") {
+      ended = true;
+      break;
+    } else if (!key.empty()) {
+      throw std::invalid_argument("unknown field '" + key + "'");
+    }
+  }
+  static const char* const names[8] = {"world", "start", "true", "odom", "clock", "scan_counter", "seed", "rng"};
+  for (int i = 0; i < 8; ++i)
+    if (!have[i]) throw std::invalid_argument(std::string("field '") + names[i] + "' is missing (truncated file?)");
+  if (!ended) throw std::invalid_argument("the 'end' line is missing (truncated file?)");
+  if (world != world_.name())
+    throw std::invalid_argument("the state is of world '" + world + "', this simulation runs '" + world_.name() + "'");
+  for (const Pose2D* p : {&start, &truth}) {
+    const std::string problem = checkStartPose(*p, world_, config_.robot_radius_m);
+    if (!problem.empty()) throw std::invalid_argument(problem);
+  }
+  start_ = start;
+  true_world_ = truth;
+  odom_ = odom;
+  clock_s_ = clock;
+  scan_counter_ = counter;
+  config_.seed = seed;
+  rng_ = rng;
 }
 
 ScanOutput Simulator::scan(int planes) {

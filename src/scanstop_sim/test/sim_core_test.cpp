@@ -409,6 +409,71 @@ TEST(RequestChecks, SimulatorRefusesBadMotionsAndResetsWithoutChangingItsState) 
   EXPECT_NO_THROW(sim.rotate(2.9));
 }
 
+TEST(SimState, ARestoredSimulationContinuesExactlyWhereTheSavedOneStopped) {
+  // A restarted sim_node resumes from its state file: the same pose, odometry, clock and the same
+  // random sequence, so the continued run equals one that never stopped.
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  b.wallX(4.0, -5, 5);
+  SimConfig config;
+  config.seed = 42;
+  Simulator a(World::fromMesh(b.mesh(), "box"), config, Pose2D(0, 0, 0));
+  a.forward(1.0);
+  a.rotate(0.7);
+  a.scan(50);
+  const std::string saved = a.saveState();
+  const MotionOutput a_motion = a.forward(0.8);
+  const ScanOutput a_scan = a.scan(50);
+
+  Simulator b2(World::fromMesh(b.mesh(), "box"), config, Pose2D(1, 1, 0));  // a fresh node: another start, a fresh generator
+  b2.restoreState(saved);
+  const MotionOutput b_motion = b2.forward(0.8);
+  const ScanOutput b_scan = b2.scan(50);
+  EXPECT_EQ(b_motion.achieved, a_motion.achieved);
+  EXPECT_EQ(b2.trueInWorld().toString(), a.trueInWorld().toString());
+  EXPECT_EQ(b2.odometry().toString(), a.odometry().toString());
+  EXPECT_EQ(b2.start().toString(), a.start().toString());
+  EXPECT_EQ(b2.clock(), a.clock());
+  ASSERT_EQ(b_scan.cloud.points.size(), a_scan.cloud.points.size());
+  size_t same = 0;
+  for (size_t i = 0; i < a_scan.cloud.points.size(); ++i) {
+    const auto& p = a_scan.cloud.points[i];
+    const auto& q = b_scan.cloud.points[i];
+    if ((!p.allFinite() && !q.allFinite()) || p == q) ++same;
+  }
+  EXPECT_EQ(same, a_scan.cloud.points.size()) << "the random sequence differs after the restore";
+}
+
+TEST(SimState, CorruptOrForeignStatesAreRefusedAndChangeNothing) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  Simulator sim(World::fromMesh(b.mesh(), "box"), SimConfig(), Pose2D(0, 0, 0));
+  sim.forward(1.0);
+  const std::string good = sim.saveState();
+  const std::string before = sim.trueInWorld().toString();
+  const auto message = [&](const std::string& text) {
+    try {
+      sim.restoreState(text);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("").find("not a sim_node state"), std::string::npos);
+  EXPECT_NE(message(good.substr(0, good.size() / 2)).find("truncated"), std::string::npos);  // cut in the rng line
+  std::string other_world = good;
+  other_world.replace(other_world.find("world box"), 9, "world hut");
+  EXPECT_NE(message(other_world).find("of world 'hut'"), std::string::npos);
+  std::string nan_pose = good;
+  nan_pose.replace(nan_pose.find("\ntrue ") + 6, 1, "nan ");
+  EXPECT_NE(message(nan_pose).find("'true' is not three finite numbers"), std::string::npos) << message(nan_pose);
+  std::string outside = good;
+  outside.replace(outside.find("\ntrue ") + 6, 1, "99");
+  EXPECT_NE(message(outside).find("outside the world"), std::string::npos) << message(outside);
+  EXPECT_EQ(sim.trueInWorld().toString(), before);
+  EXPECT_EQ(message(good), "accepted");
+}
+
 TEST(ConfigChecks, BadValuesNameTheSimNodeParameter) {
   auto message = [](const SimConfig& c, const std::string& prefix) {
     try {

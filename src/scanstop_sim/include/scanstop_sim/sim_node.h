@@ -42,7 +42,9 @@ class SimNode {
   MotionOutput runMotion(const std::function<MotionOutput()>& motion, double distance_m, double angle_rad,
                          std::string* refused);
   void onClockTimer(const ros::WallTimerEvent&);
-  /// Publishes /clock, odom, tf and ground truth for the current state.
+  /// Writes the simulation state to state_file_ (atomically; errors are logged, not fatal).
+  void persistState();
+  /// Publishes /clock, odom, tf and ground truth for the current state (and persists it).
   void publishState();
   void publishStaticTransforms();
   void publishWorldMarker();
@@ -57,6 +59,8 @@ class SimNode {
   std::mutex mutex_;
   std::atomic<bool> moving_{false};    ///< a rotate/forward motion is running
   double motion_time_scale_ = 0.0;     ///< wall seconds per modelled second of motion (0: at once)
+  double scan_time_scale_ = 0.0;       ///< wall seconds per modelled second of a scan (0: at once)
+  std::string state_file_;             ///< where the simulation state is kept after every step ("" = nowhere)
   bool publish_clock_ = false;
   bool odom_as_map_ = false;  ///< publish map -> odom as identity (no SLAM running)
   double clock_start_s_ = 1.0;

@@ -83,6 +83,15 @@ class Simulator {
   /// Throws std::invalid_argument (checkStartPose's message) and changes nothing for a bad pose.
   void reset(const Pose2D& start_in_world, int64_t seed);
 
+  /// The state that evolves while the simulation runs (start, true pose, odometry, clock, scan
+  /// counter, the random generator's state) as text, so that a restarted sim_node continues where
+  /// the dead one stopped: the same robot pose and the same random sequence.
+  std::string saveState() const;
+  /// Restores a saveState() text of the same world. Throws std::invalid_argument naming what is
+  /// wrong (format, a missing or non-finite field, a pose outside the world or in an obstacle) and
+  /// changes nothing then.
+  void restoreState(const std::string& text);
+
   const Pose2D& trueInWorld() const { return true_world_; }
   /// Ground truth in the map frame (relative to the start pose).
   Pose2D trueInMap() const { return start_.inverse() * true_world_; }
