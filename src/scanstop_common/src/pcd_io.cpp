@@ -161,10 +161,33 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
                               std::to_string(body - 8));
     // LZF expands at most ~90-fold (a 3-byte back reference yields 264 bytes).
     if (sizes[1] > 100ull * sizes[0] + 64) fail("the compressed data cannot unpack to the announced size");
-  } else if (h.points * std::accumulate(h.counts.begin(), h.counts.end(), uint64_t{0}) > (body + 1) / 2) {
-    // ASCII: every value takes at least one character and a separator (bounds PCL's up-front allocation).
-    throw IoError(path, "truncated PCD: " + std::to_string(h.points) + " points announced, the file has only " +
-                            std::to_string(body) + " data bytes");
+  } else {
+    const uint64_t values = std::accumulate(h.counts.begin(), h.counts.end(), uint64_t{0});
+    if (h.points * values > (body + 1) / 2)  // each value takes a character and a separator
+      throw IoError(path, "truncated PCD: " + std::to_string(h.points) + " points announced, the file has only " +
+                              std::to_string(body) + " data bytes");
+    // ASCII data is checked line by line: PCL 1.13 made a ~100 TB allocation on garbage data lines
+    // (pcd_fuzzer, cloud_io_test PcdFuzzFindings).
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(offset));
+    uint64_t points = 0;
+    for (size_t data_line = line_no + 1; std::getline(in, line); ++data_line) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (line.find_first_not_of(" \t") == std::string::npos) continue;
+      std::istringstream words(line);
+      uint64_t n = 0;
+      for (std::string w; words >> w; ++n) {
+        char* end = nullptr;
+        std::strtod(w.c_str(), &end);
+        if (end == w.c_str() || *end != '\0')
+          fail("line " + std::to_string(data_line) + ": '" + w.substr(0, 20) + "' is not a number");
+      }
+      if (n != values)
+        fail("line " + std::to_string(data_line) + ": " + std::to_string(n) + " values, a point has " + std::to_string(values));
+      if (++points > h.points) fail("more than the " + std::to_string(h.points) + " points the header announces");
+    }
+    if (points < h.points)
+      throw IoError(path, "truncated PCD: " + std::to_string(points) + " of " + std::to_string(h.points) + " points");
   }
   return h;
 }

@@ -142,6 +142,9 @@ TriangleMesh parsePly(const std::string& data, const std::string& name) {
       PlyElement e;
       long long count = -1;
       if (!(words >> e.name >> count) || count < 0) throw IoError(name, "malformed PLY header line: " + line);
+      for (const PlyElement& other : elements)
+        if (other.name == e.name && (e.name == "vertex" || e.name == "face"))
+          throw IoError(name, "malformed PLY: a second '" + e.name + "' element");
       e.count = static_cast<size_t>(count);
       elements.push_back(e);
     } else if (word == "property") {
@@ -182,6 +185,14 @@ TriangleMesh parsePly(const std::string& data, const std::string& name) {
     }
     if (is_vertex && (ix < 0 || iy < 0 || iz < 0)) throw IoError(name, "PLY vertex element lacks x, y or z");
     const bool normals = is_vertex && inx >= 0 && iny >= 0 && inz >= 0;
+    // Bound the element by the data (ply_fuzzer: a huge count without properties spun for minutes,
+    // a huge vertex count reserved gigabytes): each item takes at least this many bytes.
+    size_t min_item = 0;
+    for (const PlyProperty& p : e.properties) min_item += format == 0 ? 2 : plySize(p.is_list ? p.count_type : p.type);
+    if (min_item == 0) continue;
+    if (e.count > (data.size() - body) / min_item + 1)
+      throw IoError(name, "truncated PLY: element '" + e.name + "' announces " + std::to_string(e.count) +
+                              " items, the data holds at most " + std::to_string((data.size() - body) / min_item + 1));
     if (is_vertex) {
       mesh.vertices.reserve(e.count);
       if (normals) mesh.normals.reserve(e.count);
@@ -196,9 +207,14 @@ TriangleMesh parsePly(const std::string& data, const std::string& name) {
           continue;
         }
         const double n = reader.read(p.count_type);
-        if (n < 0 || n > 1e6) throw IoError(name, "malformed PLY: list of " + std::to_string(n) + " items");
+        if (!(n >= 0 && n <= 1e6) || n != std::floor(n))
+          throw IoError(name, "malformed PLY: list of " + std::to_string(n) + " items");
         list.resize(static_cast<size_t>(n));
-        for (auto& item : list) item = static_cast<int>(reader.read(p.type));
+        for (auto& item : list) {
+          // Out-of-range or NaN values would make the cast undefined (ply_fuzzer, UBSan): -1 is an invalid index.
+          const double v = reader.read(p.type);
+          item = v >= -2147483648.0 && v <= 2147483647.0 ? static_cast<int>(v) : -1;
+        }
         if (is_face && static_cast<int>(k) == ifaces) {
           // Fan-triangulate polygons.
           for (size_t t = 1; t + 1 < list.size(); ++t) mesh.faces.emplace_back(list[0], list[t], list[t + 1]);

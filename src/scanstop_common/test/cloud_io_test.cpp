@@ -139,6 +139,8 @@ TEST(CloudIo, AtomicWriteLeavesNoTemporaryFiles) {
   EXPECT_THROW(writeFileAtomic("/nonexistent/dir/f.txt", "x"), IoError);
 }
 
+const char* const kAsciiHead = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n";
+
 std::string bytes(std::initializer_list<int> b) {
   std::string s;
   for (int c : b) s.push_back(static_cast<char>(c));
@@ -166,6 +168,49 @@ TEST(CloudIo, PcdFuzzFindings) {
                             bytes({0x0d, 0, 0, 0, 0x0c, 0, 0, 'T', 'H', ' ', '2', '\n', 'H', 'P', 'E', ' ', 'F', ' ',
                                    'F', 'a', 0, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}));
   expectIoError([&] { readPcd(type_first); }, type_first, "comes before SIZE");
+  // 3. PCL 1.13's PCDReader::read requested a ~100 TB allocation (ASan allocation-size-too-big) for an
+  //    ASCII PCD with a valid header and garbage data lines. Data lines are now checked first.
+  const std::string garbage = dir.write(
+      "garbage_ascii.pcd",
+      std::string("# .PCD z0loul Data:f") + bytes({8, 0, 0, 0, 0, 0, 0, 0}) +
+          "IELDS x y z0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+          "VIEWPOINT 1 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n# .PVERSI" + std::string(19, '\xff') + "t\x02VER" +
+          bytes({0xad, 0xb6, 0xb3, 0xb8}) + " 0.7\nFIELDS" + bytes({1, 0, 0}) +
+          "\nIO RSI .7CD v0.Xv- Poi 2\nVIEWPOINT 0 0 0 1");
+  expectIoError([&] { readPcd(garbage); }, garbage, "line 11: '#' is not a number");
+  const std::string short_ascii = dir.write("short.pcd", std::string(kAsciiHead) + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1.000 2.000 3.000\n\n");
+  expectIoError([&] { readPcd(short_ascii); }, short_ascii, "truncated PCD: 1 of 2 points");
+  const std::string wide = dir.write("wide.pcd", std::string(kAsciiHead) + "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 4\n");
+  expectIoError([&] { readPcd(wide); }, wide, "line 9: 4 values, a point has 3");
+}
+
+// Found by ply_fuzzer: a second vertex element (the first with normals, the second without) gave a mesh
+// with fewer normals than vertices.
+TEST(CloudIo, PlyFuzzFindings) {
+  TempDir dir;
+  const std::string two = dir.write(
+      "two_vertex.ply",
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float nx\nproperty float ny\nproperty float nz\nelement vertex 1\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n0 0 0 0 0 1\n1 1 1\n");
+  expectIoError([&] { readPly(two); }, two, "a second 'vertex' element");
+  // A face index out of int range or a NaN list count was cast to an integer (UBSan: undefined behaviour).
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                           "property float z\nelement face 1\nproperty list float double vertex_indices\nend_header\n"
+                           "0 0 0\n1 0 0\n0 1 0\n";
+  const std::string huge = dir.write("huge_index.ply", head + "3 0 1 1e300\n");
+  expectIoError([&] { readPly(huge); }, huge, "PLY face 0 refers to vertex -1 of 3");
+  const std::string nan_count = dir.write("nan_count.ply", head + "nan 0 1 2\n");
+  expectIoError([&] { readPly(nan_count); }, nan_count, "malformed PLY: list of nan items");
+  // A huge element count: bounded by the data instead of looping or reserving gigabytes (timeout).
+  const std::string many = dir.write("many.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n"
+                                                 "property float x\nproperty float y\nproperty float z\nend_header\n" +
+                                                 std::string(24, '\0'));
+  expectIoError([&] { readPly(many); }, many, "truncated PLY: element 'vertex' announces 1000000000 items");
+  const std::string empty_el = dir.write("empty_element.ply", "ply\nformat ascii 1.0\nelement junk 4000000000\n"
+                                                              "element vertex 1\nproperty float x\nproperty float y\n"
+                                                              "property float z\nend_header\n1 2 3\n");
+  EXPECT_EQ(readPly(empty_el).vertices.size(), 1u);
 }
 
 // The header check in front of PCL: every inconsistency is an IoError naming the file and the problem.

@@ -52,7 +52,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const scanstop::MapDirectory again(dir);
     check(again.size() == before + 1, "append then reopen keeps every scan");
     check(again.scans().back().index == info.index, "the appended scan comes last");
-    check(again.nextIndex() == info.index + 1, "nextIndex() moves past the appended scan");
+    // (Past it, not necessarily to index + 1: a kept line may name the following file.)
+    check(again.nextIndex() > info.index && map.nextIndex() > info.index, "nextIndex() moves past the appended scan");
     if (info.index > 1) std::remove((dir + "/" + map.scans().back().file).c_str());
   }
   return 0;
