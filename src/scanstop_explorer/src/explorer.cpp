@@ -37,27 +37,10 @@ bool Explorer::addScan(uint32_t index, const Pose2D& T_map_base, const std::vect
   return true;
 }
 
-namespace {
-
-// scanstop_common's MapDirectory is gaining problems(): bad poses.csv lines and scan files skipped
-// and reported while loading. Reported here when present; without it this adds nothing.
-template <typename Dir>
-auto directoryProblems(const Dir& d, int) -> decltype(d.problems().size(), std::vector<std::string>()) {
-  std::vector<std::string> out;
-  for (const auto& p : d.problems()) out.push_back(p.path + ": " + p.problem);
-  return out;
-}
-template <typename Dir>
-std::vector<std::string> directoryProblems(const Dir&, long) {
-  return {};
-}
-
-}  // namespace
-
 size_t Explorer::loadMapDirectory(const MapDirectory& dir, std::vector<std::string>* problems) {
   size_t added = 0;
   if (problems)
-    for (const std::string& p : directoryProblems(dir, 0)) problems->push_back(p);
+    for (const MapProblem& p : dir.problems()) problems->push_back(p.message());
   for (size_t i = 0; i < dir.size(); ++i) {
     const MapScanInfo& info = dir.scans()[i];
     if (hasScan(info.index)) continue;

@@ -33,32 +33,15 @@ std::vector<Eigen::Vector3d> toDouble(const std::vector<Eigen::Vector3f>& pts) {
 
 }  // namespace
 
-namespace {
-
-// scanstop_common's MapDirectory is gaining problems(): bad poses.csv lines and scan files skipped
-// and reported while loading. Reported here when present; without it this adds nothing.
-template <typename Dir>
-auto directoryProblems(const Dir& d, int) -> decltype(d.problems().size(), std::vector<std::string>()) {
-  std::vector<std::string> out;
-  for (const auto& p : d.problems()) out.push_back(p.path + ": " + p.problem);
-  return out;
-}
-template <typename Dir>
-std::vector<std::string> directoryProblems(const Dir&, long) {
-  return {};
-}
-
-}  // namespace
-
 ScanPoints loadMapDirectory(const std::string& dir, std::vector<std::string>* skipped) {
   // Reading must not create anything (MapDirectory would create a missing directory).
   struct stat st;
   if (::stat((dir + "/poses.csv").c_str(), &st) != 0)
     throw IoError(dir + "/poses.csv", "does not exist (no scan in the map yet)");
   const MapDirectory map(dir);
-  for (const std::string& p : directoryProblems(map, 0)) {
-    if (!skipped) throw IoError(dir, p);
-    skipped->push_back(p);
+  for (const MapProblem& p : map.problems()) {
+    if (!skipped) throw IoError(dir, p.message());
+    skipped->push_back(p.message());
   }
   if (map.size() == 0) throw IoError(map.posesPath(), "the map has no scans");
   ScanPoints out;

@@ -258,7 +258,7 @@ MeshResult RosRobotSystem::buildMesh(const std::string& output_path) {
 int RosRobotSystem::registeredScanCount() {
   int from_dir = -1;
   try {
-    from_dir = static_cast<int>(MapDirectory(map_dir_).size());
+    from_dir = static_cast<int>(MapDirectory(map_dir_).nextIndex());  // indices may have gaps (skipped scans)
   } catch (const std::exception& e) {
     ROS_WARN("cannot read the SLAM map directory %s: %s", map_dir_.c_str(), e.what());
   }
@@ -269,7 +269,9 @@ int RosRobotSystem::registeredScanCount() {
 std::optional<Pose2D> RosRobotSystem::registeredScanPose(int index) {
   try {
     const MapDirectory map(map_dir_);
-    if (index >= 0 && index < static_cast<int>(map.size())) return map.scans()[index].map_pose;
+    // By scan index, not position: a corrupt scan skipped by the loader leaves a gap.
+    for (const MapScanInfo& s : map.scans())
+      if (static_cast<int>(s.index) == index) return s.map_pose;
   } catch (const std::exception& e) {
     ROS_WARN("cannot read the SLAM map directory %s: %s", map_dir_.c_str(), e.what());
   }
@@ -281,7 +283,9 @@ std::optional<Pose2D> RosRobotSystem::registeredScanPose(int index) {
 std::optional<Pose2D> RosRobotSystem::registeredScanOdometry(int index) {
   try {
     const MapDirectory map(map_dir_);
-    if (index >= 0 && index < static_cast<int>(map.size())) return map.scans()[index].odom_pose;
+    // By scan index, not position: a corrupt scan skipped by the loader leaves a gap.
+    for (const MapScanInfo& s : map.scans())
+      if (static_cast<int>(s.index) == index) return s.odom_pose;
   } catch (const std::exception& e) {
     ROS_WARN("cannot read the SLAM map directory %s: %s", map_dir_.c_str(), e.what());
   }

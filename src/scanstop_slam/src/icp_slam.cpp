@@ -38,33 +38,11 @@ std::string scanProblem(const PointCloud& scan_base, double max_point_distance_m
   return "";
 }
 
-namespace {
-
-// scanstop_common's MapDirectory is gaining problems() and nextIndex() (bad poses.csv lines and scan
-// files skipped and reported; indices may have gaps). These helpers use them when present and fall
-// back to size() / no problems otherwise, so this builds and behaves right with either version.
-template <typename Dir>
-auto nextIndexOf(const Dir& d, int) -> decltype(static_cast<size_t>(d.nextIndex())) {
-  return static_cast<size_t>(d.nextIndex());
-}
-template <typename Dir>
-size_t nextIndexOf(const Dir& d, long) {
-  return d.size();
-}
-template <typename Dir>
-auto reportedProblems(const Dir& d, std::vector<SkippedScan>& out, int) -> decltype(d.problems().size(), void()) {
-  for (const auto& p : d.problems()) out.push_back({p.path, p.problem});
-}
-template <typename Dir>
-void reportedProblems(const Dir&, std::vector<SkippedScan>&, long) {}
-
-}  // namespace
-
 IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
     : config_(config), map_((config.validate(), config.icp.c_max_m), config.max_points_per_voxel, config.map_spacing_m) {
   if (map_dir.empty()) return;
   dir_ = std::make_unique<MapDirectory>(map_dir);
-  reportedProblems(*dir_, skipped_, 0);
+  for (const MapProblem& p : dir_->problems()) skipped_.push_back({p.path, p.problem});
   for (size_t i = 0; i < dir_->size(); ++i) {
     const MapScanInfo& info = dir_->scans()[i];
     // The pose is kept either way (the trajectory goes on from the last scan).
@@ -84,7 +62,7 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
     }
     map_.add(transformCloud(scan, info.map_pose.toIsometry3f()).points);
   }
-  count_ = nextIndexOf(*dir_, 0);
+  count_ = static_cast<size_t>(dir_->nextIndex());
 }
 
 std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
@@ -114,7 +92,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   if (problem.empty() && !std::isfinite(stamp_s)) problem = "the stamp is not finite";
   if (!problem.empty()) throw std::invalid_argument(problem);
   Registration r;
-  r.index = static_cast<uint32_t>(dir_ ? nextIndexOf(*dir_, 0) : count_);
+  r.index = static_cast<uint32_t>(dir_ ? static_cast<size_t>(dir_->nextIndex()) : count_);
   // Initial guess: the last corrected pose composed with the odometry delta since then. The first
   // scan defines the map: map = odom at the first scan.
   r.guess = count_ == 0 ? odom_pose : last_map_ * last_odom_.between(odom_pose);
@@ -178,7 +156,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   map_.add(in_map);
   last_map_ = r.map_pose;
   last_odom_ = odom_pose;
-  count_ = dir_ ? nextIndexOf(*dir_, 0) : count_ + 1;
+  count_ = dir_ ? static_cast<size_t>(dir_->nextIndex()) : count_ + 1;
   r.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
