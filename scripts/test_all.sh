@@ -79,5 +79,14 @@ run_rc=$?
 junit run_tests_completed $([[ $run_rc -eq 0 ]] && echo 1 || echo 0) logs/run_tests.log
 t_test=$(date +%s)
 
+# Optional (SCANSTOP_SANITIZE=1): every package's unit gtests again under ASan + UBSan + LSan
+# (scripts/sanitize.sh; a separate build, about 1.5 h on 2 shared cores, so not in CI by default).
+if [[ "${SCANSTOP_SANITIZE:-0}" == "1" ]]; then
+  echo "test: unit tests under ASan + UBSan + LSan (scripts/sanitize.sh, log in logs/sanitize.log)"
+  if bash scripts/sanitize.sh > logs/sanitize.log 2>&1; then san_ok=1; else san_ok=0; fi
+  grep -E "PASS|FAIL" logs/sanitize.log | tail -30
+  junit sanitizers $san_ok logs/sanitize.log
+fi
+
 echo "times: setup $((t_setup - t0)) s, build $((t_build - t_setup)) s, tests $((t_test - t_build)) s"
 /usr/bin/python3 scripts/test_results.py "$results"
