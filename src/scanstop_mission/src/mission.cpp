@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -59,11 +60,25 @@ Mission::Mission(MissionConfig config, RobotSystem& robot, Log info, Log warn)
 bool Mission::loadSavedState() {
   std::ifstream probe(statePath());
   if (!probe) return false;
-  MissionState loaded = MissionState::load(statePath());
+  probe.close();
+  MissionState loaded;
+  std::string repaired;
+  try {
+    loaded = MissionState::load(statePath());
+  } catch (const IoError& e) {
+    // A truncated or corrupt state (a disk filled up, an editor): keep it for inspection and rebuild
+    // the mission from what SLAM stored, so no scan is lost and none is taken twice.
+    const std::string kept = statePath() + ".corrupt";
+    std::rename(statePath().c_str(), kept.c_str());
+    repaired = std::string(e.what()) + "; kept as " + kept + ", the mission is rebuilt from the SLAM map";
+    warn_(repaired);
+    loaded = MissionState();
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     state_ = loaded;
     if (state_.world.empty()) state_.world = config_.world;
+    if (!repaired.empty()) state_.events.push_back({0.0, repaired});
   }
   // Adopt scans SLAM registered after our last save (we died between its answer and our save).
   adoptScansRegisteredElsewhere();

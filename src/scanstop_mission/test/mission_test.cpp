@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
 #include "scanstop_mission/mission.h"
 
 namespace scanstop {
@@ -335,6 +336,43 @@ TEST(Mission, ResumesAfterTheMissionNodeDiesWithoutLosingOrRepeatingAScan) {
   // Every scan SLAM holds is in the mission exactly once, in order.
   ASSERT_EQ(s.scans.size(), sys.slam_poses.size());
   for (size_t i = 0; i < s.scans.size(); ++i) EXPECT_EQ(s.scans[i].index, static_cast<int>(i));
+}
+
+TEST(Mission, ACorruptStateIsKeptAsideNamedAndRebuiltFromTheSlamMap) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {2, 1}, {1, 2}, {0, 2}};
+  {
+    Mission first(config(dir.path()), sys, quiet, quiet);
+    sys.on_scan = [&first](int n) {
+      if (n == 3) first.abort();
+    };
+    EXPECT_EQ(first.run(), State::Aborted);
+  }
+  sys.on_scan = nullptr;
+  const size_t registered = sys.slam_poses.size();
+  ASSERT_GE(registered, 2u);
+  const std::string path = dir.path() + "/mission_state.yaml";
+  {
+    const std::string text = readFile(path);
+    std::ofstream(path, std::ios::trunc) << text.substr(0, text.size() / 3) << "\n  - index: [garbage";
+  }
+  std::vector<std::string> warnings;
+  Mission second(config(dir.path()), sys, quiet, [&](const std::string& w) { warnings.push_back(w); });
+  EXPECT_TRUE(second.loadSavedState());
+  ASSERT_FALSE(warnings.empty());
+  EXPECT_NE(warnings[0].find(path), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find(".corrupt"), std::string::npos) << warnings[0];
+  EXPECT_TRUE(std::ifstream(path + ".corrupt").good());
+  // Every scan SLAM holds is back in the mission, once, with SLAM's pose.
+  const MissionState s = second.snapshot();
+  ASSERT_EQ(s.scans.size(), registered);
+  for (size_t i = 0; i < registered; ++i) {
+    EXPECT_EQ(s.scans[i].index, static_cast<int>(i));
+    EXPECT_EQ(s.scans[i].map_pose.toString(), sys.slam_poses[i].toString());
+  }
+  EXPECT_EQ(second.run(), State::Done);
+  EXPECT_EQ(second.snapshot().scans.size(), sys.slam_poses.size());
 }
 
 TEST(Mission, ResumesFromTheBaseOdometryWhenItDiedWhileTheBaseMoved) {
