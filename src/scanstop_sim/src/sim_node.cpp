@@ -121,19 +121,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "base_frame", base_frame_);
   ros_params::optional(pnh, "laser_frame", laser_frame_);
   ros_params::optional(pnh, "odom_as_map", odom_as_map_);
-  {
-    const std::vector<std::pair<std::string, std::string>> frames{{"world_frame", world_frame_}, {"map_frame", map_frame_},
-        {"odom_frame", odom_frame_}, {"base_frame", base_frame_}, {"laser_frame", laser_frame_}};
-    for (size_t i = 0; i < frames.size(); ++i) {
-      if (frames[i].second.empty() || frames[i].second.find_first_of(" /") == 0)
-        throw ConfigError("parameter '" + pnh.resolveName(frames[i].first) + "' = '" + frames[i].second +
-                          "' must be a non-empty frame id without a leading '/' or space");
-      for (size_t j = 0; j < i; ++j)
-        if (frames[i].second == frames[j].second)
-          throw ConfigError("parameters '" + pnh.resolveName(frames[j].first) + "' and '" + pnh.resolveName(frames[i].first) +
-                            "' are both '" + frames[i].second + "': the frames must differ");
-    }
-  }
+  ros_params::requireFrames(pnh, {{"world_frame", world_frame_}, {"map_frame", map_frame_}, {"odom_frame", odom_frame_},
+                                  {"base_frame", base_frame_}, {"laser_frame", laser_frame_}});
   nh.param("/use_sim_time", publish_clock_, false);
 
   ROS_INFO("sim_node: loading world %s", world_path.c_str());

@@ -84,17 +84,7 @@ UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   requireInRange(pnh.resolveName("reconnect_interval"), reconnect_interval, 0.05, 600.0, "s");
   requireInRange(pnh.resolveName("diagnostic_period"), diagnostic_period, 0.05, 600.0, "s");
   requireInRange(pnh.resolveName("odom_timeout"), odom_timeout_s_, 0.0, 60.0, "s");
-  const std::vector<std::pair<std::string, std::string>> frames{
-      {"base_frame", base_frame_}, {"laser_frame", laser_frame_}, {"odom_frame", odom_frame_}};
-  for (size_t i = 0; i < frames.size(); ++i) {
-    if (frames[i].second.empty() || frames[i].second.find_first_of(" /") == 0)
-      throw ConfigError("parameter '" + pnh.resolveName(frames[i].first) + "' = '" + frames[i].second +
-                        "' must be a non-empty frame id without a leading '/' or space");
-    for (size_t j = 0; j < i; ++j)
-      if (frames[i].second == frames[j].second)
-        throw ConfigError("parameters '" + pnh.resolveName(frames[j].first) + "' and '" +
-                          pnh.resolveName(frames[i].first) + "' are both '" + frames[i].second + "': the frames must differ");
-  }
+  ros_params::requireFrames(pnh, {{"base_frame", base_frame_}, {"laser_frame", laser_frame_}, {"odom_frame", odom_frame_}});
   driver_ = std::make_unique<UrgDriver>(config);
 
   Eigen::Isometry3d T_base_laser = Eigen::Isometry3d::Identity();

@@ -6,6 +6,7 @@
 #include <ros/param.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "scanstop_common/error.h"
@@ -47,6 +48,20 @@ inline std::vector<std::string> unknownParameters(const ros::NodeHandle& nh, con
     if (!is_known) unknown.push_back(name);
   }
   return unknown;
+}
+
+/// Checks frame-id parameters (name, value): each non-empty, without a leading '/' or space, and all
+/// different. Throws ConfigError naming the parameter(s) with their full names.
+inline void requireFrames(const ros::NodeHandle& nh, const std::vector<std::pair<std::string, std::string>>& frames) {
+  for (size_t i = 0; i < frames.size(); ++i) {
+    if (frames[i].second.empty() || frames[i].second.find_first_of(" /") == 0)
+      throw ConfigError("parameter '" + nh.resolveName(frames[i].first) + "' = '" + frames[i].second +
+                        "' must be a non-empty frame id without a leading '/' or space");
+    for (size_t j = 0; j < i; ++j)
+      if (frames[i].second == frames[j].second)
+        throw ConfigError("parameters '" + nh.resolveName(frames[j].first) + "' and '" + nh.resolveName(frames[i].first) +
+                          "' are both '" + frames[i].second + "': the frames must differ");
+  }
 }
 
 }  // namespace ros_params
