@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Counts the JUnit XML results under a directory and prints `tests: N passed, M failed`.
 
-Every <testcase> is one test; it failed when it holds a <failure> or <error>. A results file
+Every <testcase> is one test; it failed when it holds a <failure> or <error> (its first lines
+are printed under the FAILED line). A results file
 that is missing (catkin writes MISSING-*.xml for it) or unreadable counts as one failed test.
 Exit status: 0 when nothing failed and at least one test ran, 1 otherwise.
 """
@@ -9,6 +10,16 @@ import glob
 import os
 import sys
 import xml.etree.ElementTree as ET
+
+
+def excerpt(element, max_lines=25):
+    """The first lines of a <failure>/<error> (message and text), indented, so a CI log shows why."""
+    text = "\n".join(t for t in (element.get("message", ""), element.text or "") if t.strip())
+    lines = [l for l in text.splitlines() if l.strip()]
+    if not lines:
+        return ""
+    more = ["... (%d more lines in the XML)" % (len(lines) - max_lines)] if len(lines) > max_lines else []
+    return "".join("\n    | " + l[:300] for l in lines[:max_lines] + more)
 
 
 def count(path):
@@ -25,9 +36,12 @@ def count(path):
     for case in cases:
         seen = True
         label = "%s.%s" % (case.get("classname", ""), case.get("name", ""))
-        if case.find("failure") is not None or case.find("error") is not None:
+        bad = case.find("failure")
+        if bad is None:
+            bad = case.find("error")
+        if bad is not None:
             failed += 1
-            failed_names.append("%s: %s" % (name, label))
+            failed_names.append("%s: %s%s" % (name, label, excerpt(bad)))
         elif case.find("skipped") is not None or case.get("status") == "notrun":
             skipped += 1
         else:
