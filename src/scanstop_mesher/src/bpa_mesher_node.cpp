@@ -1,5 +1,6 @@
 #include "scanstop_mesher/bpa_mesher_node.h"
 
+#include <malloc.h>
 #include <sys/stat.h>
 
 #include <chrono>
@@ -71,7 +72,11 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   coloring_ = parseColoring(c.color_mode, "color_mode");
 
   // Relative names: meant to be remapped / pushed into a namespace.
-  marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("mesher/mesh_markers", 1, true);
+  // Not latched: a latched mesh would keep ~120 bytes per shown triangle in this process for good.
+  // A late subscriber (rviz started after the mesh) gets the mesh read back from its file instead.
+  marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>(
+      "mesher/mesh_markers", 1, [this](const ros::SingleSubscriberPublisher& pub) { onMarkerSubscriber(pub); },
+      ros::SubscriberStatusCallback(), ros::VoidConstPtr(), false);
   build_srv_ = nh.advertiseService("mesher/build_mesh", &BpaMesherNode::onBuildMesh, this);
   if (!c.load_mesh.empty()) {
     reloadMesh();  // a file that exists but cannot be read stops the node
@@ -95,7 +100,19 @@ void BpaMesherNode::reloadMesh() {
   const TriangleMesh mesh = readMesh(config_.load_mesh);
   mesh_mtime_ns_ = mtime;
   ROS_INFO("bpa_mesher_node: showing %zu triangles from %s", mesh.faces.size(), config_.load_mesh.c_str());
-  publishMesh(mesh);
+  publishMesh(mesh, config_.load_mesh);
+}
+
+void BpaMesherNode::onMarkerSubscriber(const ros::SingleSubscriberPublisher& pub) {
+  if (shown_mesh_file_.empty()) return;
+  try {
+    const TriangleMesh mesh = readMesh(shown_mesh_file_);
+    pub.publish(markers(mesh));
+  } catch (const std::exception& e) {
+    ROS_WARN("bpa_mesher_node: cannot show %s to %s: %s", shown_mesh_file_.c_str(), pub.getSubscriberName().c_str(),
+             e.what());
+  }
+  malloc_trim(0);
 }
 
 bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop_msgs::BuildMesh::Response& res) {
@@ -121,51 +138,64 @@ bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop
     } catch (const ConfigError& e) {
       throw ConfigError(std::string("bad request: ") + e.what());
     }
-    ScanPoints points;
-    std::string source;
-    std::vector<std::string> skipped;
-    if (req.input_path.empty()) {
-      points = loadMapDirectory(config_.map_dir, &skipped);
-      source = "map " + config_.map_dir;
-    } else {
-      points = fromCloud(readCloud(req.input_path), Eigen::Vector3f::Zero());
-      source = req.input_path;
-    }
-    for (const std::string& s : skipped) ROS_ERROR("bpa_mesher_node: %s", s.c_str());
-    const std::string problem = pointsProblem(points, config_.max_coordinate_m);
-    if (!problem.empty()) throw std::invalid_argument("bad input " + source + ": " + problem);
-    const MesherResult r = buildMesh(points, mc);
-    writeMesh(output, r.mesh);
-    publishMesh(r.mesh);
-    res.success = true;
-    res.points = static_cast<uint32_t>(r.points);
-    res.triangles = static_cast<uint32_t>(r.mesh.faces.size());
-    res.file = output;
-    std::ostringstream msg;
-    msg << r.mesh.faces.size() << " triangles from " << r.points << " of " << r.input_points << " points of " << source
-        << " (radii";
-    for (double x : r.radii_m) msg << " " << x;
-    msg << " m; " << r.topology.nonmanifold_edges << " non-manifold edges, " << r.topology.nonmanifold_vertices
-        << " non-manifold vertices)";
-    for (const std::string& s : skipped) msg << "; " << s;
-    res.message = msg.str();
-    ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
+    buildAndPublish(req, mc, output, res);
   } catch (const std::exception& e) {
     res.message = e.what();
     ROS_ERROR("bpa_mesher_node: build_mesh failed: %s", e.what());
   }
+  // The points, the mesh and the marker messages are gone by now; hand the freed heap back to the
+  // system so that the node returns to its idle size (plus the latched display) after every mesh.
+  malloc_trim(0);
   res.duration_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return true;
 }
 
-void BpaMesherNode::publishMesh(const TriangleMesh& mesh) {
+void BpaMesherNode::buildAndPublish(const scanstop_msgs::BuildMesh::Request& req, const MesherConfig& mc,
+                                    const std::string& output, scanstop_msgs::BuildMesh::Response& res) {
+  ScanPoints points;
+  std::string source;
+  std::vector<std::string> skipped;
+  if (req.input_path.empty()) {
+    points = loadMapDirectory(config_.map_dir, &skipped);
+    source = "map " + config_.map_dir;
+  } else {
+    points = fromCloud(readCloud(req.input_path), Eigen::Vector3f::Zero());
+    source = req.input_path;
+  }
+  for (const std::string& s : skipped) ROS_ERROR("bpa_mesher_node: %s", s.c_str());
+  const std::string problem = pointsProblem(points, config_.max_coordinate_m);
+  if (!problem.empty()) throw std::invalid_argument("bad input " + source + ": " + problem);
+  const MesherResult r = buildMesh(points, mc);
+  writeMesh(output, r.mesh);
+  publishMesh(r.mesh, output);
+  res.success = true;
+  res.points = static_cast<uint32_t>(r.points);
+  res.triangles = static_cast<uint32_t>(r.mesh.faces.size());
+  res.file = output;
+  std::ostringstream msg;
+  msg << r.mesh.faces.size() << " triangles from " << r.points << " of " << r.input_points << " points of " << source
+      << " (radii";
+  for (double x : r.radii_m) msg << " " << x;
+  msg << " m; " << r.topology.nonmanifold_edges << " non-manifold edges, " << r.topology.nonmanifold_vertices
+      << " non-manifold vertices)";
+  for (const std::string& s : skipped) msg << "; " << s;
+  res.message = msg.str();
+  ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
+}
+
+void BpaMesherNode::publishMesh(const TriangleMesh& mesh, const std::string& file) {
+  shown_mesh_file_ = file;
   if (mesh.faces.size() > static_cast<size_t>(config_.max_display_triangles))
     ROS_INFO("bpa_mesher_node: %zu triangles: showing every %zu-th (max_display_triangles = %d)", mesh.faces.size(),
              (mesh.faces.size() + config_.max_display_triangles - 1) / config_.max_display_triangles,
              config_.max_display_triangles);
-  marker_pub_.publish(meshToMarkers(mesh, config_.frame_id, ros::Time::now(), coloring_,
-                                    static_cast<size_t>(config_.max_triangles_per_marker),
-                                    static_cast<size_t>(config_.max_display_triangles)));
+  if (marker_pub_.getNumSubscribers() > 0) marker_pub_.publish(markers(mesh));
+}
+
+visualization_msgs::MarkerArray BpaMesherNode::markers(const TriangleMesh& mesh) const {
+  return meshToMarkers(mesh, config_.frame_id, ros::Time::now(), coloring_,
+                       static_cast<size_t>(config_.max_triangles_per_marker),
+                       static_cast<size_t>(config_.max_display_triangles));
 }
 
 void BpaMesherNode::onMapTimer(const ros::WallTimerEvent&) {

@@ -205,7 +205,9 @@ double meanSpacing(const std::vector<Eigen::Vector3f>& points, size_t max_sample
     double best = std::numeric_limits<double>::infinity();
     for (double r = 0.25 * guess; r < 4.0 * extent; r *= 2.0) {
       grid.forEachWithin(p[i], r, [&](uint32_t j) {
-        if (j != i) best = std::min(best, (p[j] - p[i]).squaredNorm());
+        // Exact duplicates (real scans repeat points) say nothing about the spacing of the surface.
+        const double d2 = (p[j] - p[i]).squaredNorm();
+        if (j != i && d2 > 0.0) best = std::min(best, d2);
       });
       if (std::isfinite(best)) break;
     }
@@ -304,7 +306,7 @@ MesherResult buildMesh(const ScanPoints& input, const MesherConfig& config) {
   if (res.points < 3)
     throw std::runtime_error("nothing to mesh: " + std::to_string(res.points) + " of " +
                              std::to_string(input.size()) + " points have a usable normal");
-  for (double r : res.radii_m) bpa.pivot(r);
+  bpa.run(res.radii_m);  // large maps: slabs on OpenMP threads, seams stitched
   res.mesh = bpa.mesh();
   res.stats = bpa.stats();
   res.bpa_seconds = elapsed(t1);

@@ -118,6 +118,16 @@ TEST(BpaMesherNode, BuildsMeshesOfTheMapAndOfFilesAndReportsErrors) {
       EXPECT_LE(m.points.size(), 15000u);
       EXPECT_EQ(m.header.frame_id, "map");
     }
+  // The markers are not latched (the node keeps no mesh in memory): a subscriber that comes later
+  // (rviz opened after the mesh) gets the same mesh read back from its file.
+  // (This process must drop its subscription first: roscpp shares one connection per topic.)
+  s1.shutdown();
+  ros::WallDuration(0.5).sleep();
+  visualization_msgs::MarkerArray late_markers;
+  auto late = nh.subscribe<visualization_msgs::MarkerArray>("mesher/mesh_markers", 1,
+                                                            [&](const auto& m) { late_markers = *m; });
+  EXPECT_TRUE(spinUntil([&] { return triangles(late_markers) == srv.response.triangles; }, 10.0))
+      << triangles(late_markers) << " triangles for a late subscriber";
 
   // A file as input, given radii, binary STL out.
   const std::string cloud = g_map_dir + "/scans/scan_0000.pcd";

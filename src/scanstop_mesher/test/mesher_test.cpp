@@ -68,6 +68,10 @@ TEST(Mesher, MeanSpacingOfAGrid) {
     for (int y = 0; y < 50; ++y) grid.emplace_back(0.01f * x, 0.01f * y, 0.0f);
   EXPECT_NEAR(meanSpacing(grid), 0.01, 1e-4);
   EXPECT_EQ(meanSpacing({{0, 0, 0}}), 0.0);
+  // Every point twice (a real scan repeats points): still the spacing of the surface, not 0.
+  std::vector<Eigen::Vector3f> twice = grid;
+  twice.insert(twice.end(), grid.begin(), grid.end());
+  EXPECT_NEAR(meanSpacing(twice), 0.01, 1e-4);
   const std::vector<double> r = automaticRadii(0.01);
   ASSERT_EQ(r.size(), 3u);
   EXPECT_LT(r[0], r[1]);

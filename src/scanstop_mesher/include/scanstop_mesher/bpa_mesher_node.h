@@ -51,7 +51,15 @@ class BpaMesherNode {
 
  private:
   bool onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop_msgs::BuildMesh::Response& res);
-  void publishMesh(const TriangleMesh& mesh);
+  /// Loads the input, meshes, writes and publishes (the work of onBuildMesh after the request checks);
+  /// every large buffer is released when it returns.
+  void buildAndPublish(const scanstop_msgs::BuildMesh::Request& req, const MesherConfig& mc, const std::string& output,
+                       scanstop_msgs::BuildMesh::Response& res);
+  /// Shows `mesh` (the contents of `file`) to the current subscribers; later subscribers get it from
+  /// `file` (onMarkerSubscriber).
+  void publishMesh(const TriangleMesh& mesh, const std::string& file);
+  void onMarkerSubscriber(const ros::SingleSubscriberPublisher& pub);
+  visualization_msgs::MarkerArray markers(const TriangleMesh& mesh) const;
   void onMapTimer(const ros::WallTimerEvent&);
   void publishMapView();
   /// Publishes load_mesh when it exists and changed since the last call; throws IoError when it
@@ -66,6 +74,7 @@ class BpaMesherNode {
   ros::WallTimer map_timer_;
   std::string published_poses_;
   long long mesh_mtime_ns_ = -1;
+  std::string shown_mesh_file_;  ///< the mesh on mesher/mesh_markers ("" = none yet)
 };
 
 }  // namespace mesher
