@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
+#include <omp.h>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -40,33 +42,59 @@ BallPivoting::BallPivoting(const std::vector<Eigen::Vector3f>& points, const std
   if (points.size() >= static_cast<size_t>(std::numeric_limits<int>::max()))
     throw std::invalid_argument("BallPivoting: too many points (" + std::to_string(points.size()) + ")");
   const size_t n = points.size();
-  p_.resize(n);
-  n_.resize(n);
-  valid_.assign(n, 0);
+  num_points_ = n;
+  p_store_.resize(n);
+  n_store_.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d p = points[i].cast<double>();
     const Eigen::Vector3d nn = normals[i].cast<double>();
     const double len = nn.norm();
     if (p.allFinite() && nn.allFinite() && len > 1e-6) {
-      p_[i] = p;
-      n_[i] = nn / len;
-      valid_[i] = 1;
+      p_store_[i] = p;
+      n_store_[i] = nn / len;
       ++stats_.points;
     } else {
       // Left out of the grid: such a point neither becomes a vertex nor blocks a ball.
-      p_[i] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-      n_[i] = Eigen::Vector3d::Zero();
+      p_store_[i] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+      n_store_[i] = Eigen::Vector3d::Zero();
     }
   }
-  used_.assign(n, 0);
-  out_head_.assign(n, -1);
-  front_deg_.assign(n, 0);
-  // About 2 triangles, 6 directed edges and 4 front edges per point on a closed surface.
-  size_t cap = 1024;
-  while (cap < 16 * n) cap *= 2;
-  dir_edges_.assign(cap, kEmptyKey);
+  used_store_.assign(n, 0);
+  out_head_store_.assign(n, -1);
+  front_deg_store_.assign(n, 0);
+  p_ = p_store_.data();
+  n_ = n_store_.data();
+  used_ = used_store_.data();
+  out_head_ = out_head_store_.data();
+  front_deg_ = front_deg_store_.data();
+  allocDirEdges(n);
   edges_.reserve(4 * n);
   faces_.reserve(2 * n);
+}
+
+BallPivoting::BallPivoting(BallPivoting& parent, int region)
+    : num_points_(parent.num_points_),
+      p_(parent.p_),
+      n_(parent.n_),
+      used_(parent.used_),
+      out_head_(parent.out_head_),
+      front_deg_(parent.front_deg_),
+      region_(parent.region_),
+      region_id_(region) {
+  size_t n = 0;
+  for (size_t i = 0; i < num_points_; ++i) n += region_[i] == region;
+  stats_.points = n;
+  allocDirEdges(n);
+  edges_.reserve(4 * n);
+  faces_.reserve(2 * n);
+}
+
+void BallPivoting::allocDirEdges(size_t points) {
+  // About 2 triangles, 6 directed edges and 4 front edges per point on a closed surface.
+  size_t cap = 1024;
+  while (cap < 16 * points) cap *= 2;
+  dir_edges_.assign(cap, kEmptyKey);
+  dir_edge_count_ = 0;
 }
 
 BallPivoting::~BallPivoting() = default;
@@ -294,28 +322,53 @@ void BallPivoting::pivotEdge(int e) {
   ++stats_.pivots;
   const Edge E = edges_[e];
   const int i = E.a, j = E.b, k = E.opp;
-  const Eigen::Vector3d m = 0.5 * (p_[i] + p_[j]);
+  const Eigen::Vector3d pi = p_[i], pj = p_[j];
+  const Eigen::Vector3d m = 0.5 * (pi + pj);
   const double r2 = radius_ * radius_;
-  const double half2 = 0.25 * (p_[j] - p_[i]).squaredNorm();
+  const Eigen::Vector3d ij = pj - pi;
+  const double ij2 = ij.squaredNorm();
+  const double half2 = 0.25 * ij2;
   if (half2 >= r2) {
     edges_[e].state = kBoundary;
     return;
   }
   const double rho = std::sqrt(r2 - half2);  // radius of the circle of ball centres around the edge
-  const Eigen::Vector3d axis = (p_[j] - p_[i]).normalized();
+  const Eigen::Vector3d axis = ij.normalized();
   Eigen::Vector3d u = E.center - m;
   u -= axis * axis.dot(u);
-  grid_->within(m, radius_ + rho, scratch_);
 
+  // Only points within 2 r of both i and j can be the third corner of a ball through i and j or
+  // lie inside such a ball: the lens, copied for the candidate and empty-ball loops.
+  const double reach2 = 4.0 * r2;
+  std::vector<LensPoint>& lens = lens_;
+  lens.clear();
+  grid_->forEachWithin(m, radius_ + rho, [&](uint32_t uq) {
+    const Eigen::Vector3d& q = p_[uq];
+    const double di2 = (q - pi).squaredNorm();
+    if (di2 > reach2) return;
+    const double dj2 = (q - pj).squaredNorm();
+    if (dj2 > reach2) return;
+    lens.push_back({q, di2, dj2, static_cast<int>(uq)});
+  });
+
+  // Triangle (i, q, j) faces along n = (q - i) x (j - i); n . n_i = (q - i) . ((j - i) x n_i).
+  const Eigen::Vector3d ti = ij.cross(n_[i]), tj = ij.cross(n_[j]);
   std::vector<Candidate>& candidates = candidates_;
   candidates.clear();
-  const double reach2 = 4.0 * r2;  // a ball through i, j and q: q within 2r of both
-  for (uint32_t uq : scratch_) {
-    const int q = static_cast<int>(uq);
-    if (q == i || q == j || q == k) continue;
-    if ((p_[q] - p_[i]).squaredNorm() > reach2 || (p_[q] - p_[j]).squaredNorm() > reach2) continue;
-    Eigen::Vector3d c;
-    if (!ballCenter(i, q, j, c, true)) continue;
+  for (const LensPoint& L : lens) {
+    const int q = L.q;
+    if (q == i || q == j || q == k || !mine(q)) continue;
+    const Eigen::Vector3d iq = L.p - pi;
+    if (!(iq.dot(ti) > 0.0) || !(iq.dot(tj) > 0.0)) continue;
+    const Eigen::Vector3d n = iq.cross(ij);
+    if (!(n.dot(n_[q]) > 0.0)) continue;
+    const double n2 = n.squaredNorm();
+    if (!(n2 > 1e-12 * L.di2 * ij2)) continue;  // (nearly) collinear or coincident corners
+    // Circumradius^2 = |iq|^2 |ij|^2 |jq|^2 / (4 |n|^2): no ball of this radius when above r^2.
+    const double h2 = r2 - L.di2 * ij2 * L.dj2 / (4.0 * n2);
+    if (h2 < 0.0) continue;
+    const Eigen::Vector3d cc = pi + (ij2 * n.cross(iq) + L.di2 * ij.cross(n)) / (2.0 * n2);
+    const Eigen::Vector3d c = cc + std::sqrt(h2 / n2) * n;
     const Eigen::Vector3d v = c - m;
     // Rotation about i->j (away from k) from u to v, as a pseudo-angle in [0, 4) that orders like
     // the angle in [0, 2 pi) (no atan2 needed for choosing the smallest).
@@ -324,14 +377,27 @@ void BallPivoting::pivotEdge(int e) {
     if (!(l1 > 0.0)) continue;
     double angle = y >= 0.0 ? (x >= 0.0 ? y / l1 : 1.0 - x / l1) : (x < 0.0 ? 2.0 - y / l1 : 3.0 + x / l1);
     if (angle > 4.0 - 1e-9) angle = 0.0;  // on the current ball's sphere, within rounding
-    candidates.push_back({angle, q, c});
+    candidates.push_back({angle, q, c, (L.p - m).squaredNorm()});
   }
-  std::sort(candidates.begin(), candidates.end(), [this, &m](const Candidate& a, const Candidate& b) {
-    if (a.angle != b.angle) return a.angle < b.angle;
-    return (p_[a.q] - m).squaredNorm() < (p_[b.q] - m).squaredNorm();
-  });
-  for (const Candidate& c : candidates) {
-    if (!ballEmpty(c.center, scratch_, i, c.q, j)) continue;
+  // In order of pivot angle (then distance to the edge's midpoint): usually the first is taken, so
+  // the next one is picked by a linear scan instead of sorting all.
+  const double limit = r2 * (1.0 - kInsideEps);
+  for (size_t taken = 0; taken < candidates.size(); ++taken) {
+    size_t best = taken;
+    for (size_t x = taken + 1; x < candidates.size(); ++x) {
+      const Candidate& a = candidates[x];
+      const Candidate& b = candidates[best];
+      if (a.angle < b.angle || (a.angle == b.angle && a.dist2 < b.dist2)) best = x;
+    }
+    std::swap(candidates[taken], candidates[best]);
+    const Candidate& c = candidates[taken];
+    bool empty = true;
+    for (const LensPoint& L : lens)
+      if (L.q != i && L.q != j && L.q != c.q && (L.p - c.center).squaredNorm() < limit) {
+        empty = false;
+        break;
+      }
+    if (!empty) continue;
     // The valid triangle with the smallest pivot angle: it must not use a vertex inside the
     // surface, give an edge a third triangle, or run an existing edge in the same direction.
     const int q = c.q;
@@ -369,12 +435,12 @@ bool BallPivoting::findSeed() {
     int tries = 0;
     for (uint32_t k = grid_->cellBegin(seed_cursor_); k < grid_->cellBegin(seed_cursor_ + 1) && tries < kTriesPerCell; ++k) {
       const int v = static_cast<int>(order[k]);
-      if (used_[v]) continue;
+      if (!mine(v) || used_[v] || (seam_band_ > 0.0 && !nearCut(v))) continue;
       ++tries;
       grid_->within(p_[v], 2.0 * radius_, scratch_);
       near.clear();
       for (uint32_t q : scratch_) {
-        if (static_cast<int>(q) == v || used_[q]) continue;
+        if (static_cast<int>(q) == v || !mine(static_cast<int>(q)) || used_[q]) continue;
         const double d2 = (p_[q] - p_[v]).squaredNorm();
         if (d2 < 4.0 * r2) near.emplace_back(d2, static_cast<int>(q));
       }
@@ -400,15 +466,29 @@ void BallPivoting::pivot(double radius_m) {
   if (radius_m < radius_)
     throw std::invalid_argument("BallPivoting: radii must increase (" + std::to_string(radius_m) + " after " +
                                 std::to_string(radius_) + ")");
+  grid_store_ = std::make_unique<SpatialGrid>(p_store_, 2.0 * radius_m);
+  grid_ = grid_store_.get();
+  runPass(radius_m, false);
+}
+
+bool BallPivoting::nearCut(int v) const {
+  const double x = p_[v][cut_axis_];
+  for (double c : cuts_)
+    if (std::abs(x - c) < seam_band_) return true;
+  return false;
+}
+
+void BallPivoting::runPass(double radius_m, bool seam) {
   const auto t0 = std::chrono::steady_clock::now();
   radius_ = radius_m;
-  grid_ = std::make_unique<SpatialGrid>(p_, 2.0 * radius_);
-  // Thesis 7.4: the boundary of the surface so far becomes active again for the new radius.
+  // Thesis 7.4: the boundary of the surface so far becomes active again for the new radius (in
+  // the seam phase only where a seam may change it: near a cut, or made by the seam phase).
   active_.clear();
   head_ = 0;
   for (size_t e = 0; e < edges_.size(); ++e) {
     Edge& E = edges_[e];
     if (E.state == kRemoved) continue;
+    if (seam && e < seam_first_edge_ && !nearCut(E.a) && !nearCut(E.b)) continue;
     if (ballCenter(E.a, E.b, E.opp, E.center, false)) {
       E.state = kActive;
       active_.push_back(static_cast<int>(e));
@@ -425,20 +505,165 @@ void BallPivoting::pivot(double radius_m) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
+int BallPivoting::automaticRegions(size_t points) {
+  return static_cast<int>(std::max<size_t>(1, std::min<size_t>(4, points / 500000)));
+}
+
+void BallPivoting::run(const std::vector<double>& radii_m, int regions) {
+  if (regions < 0) throw std::invalid_argument("BallPivoting: regions must be >= 0, got " + std::to_string(regions));
+  double prev = radius_;
+  for (double r : radii_m) {
+    if (!(r > 0.0) || !std::isfinite(r))
+      throw std::invalid_argument("BallPivoting: radius must be positive and finite, got " + std::to_string(r));
+    if (r < prev)
+      throw std::invalid_argument("BallPivoting: radii must increase (" + std::to_string(r) + " after " +
+                                  std::to_string(prev) + ")");
+    prev = r;
+  }
+  if (regions == 0) regions = automaticRegions(stats_.points);
+  regions = std::min(regions, 64);
+  if (regions <= 1 || radii_m.empty() || !edges_.empty() || !faces_.empty() || stats_.points < 3) {
+    for (double r : radii_m) pivot(r);
+    return;
+  }
+  runRegions(radii_m, regions);
+}
+
+void BallPivoting::runRegions(const std::vector<double>& radii_m, int regions) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t n = num_points_;
+  // Slabs of equal point counts across the longest axis.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (size_t i = 0; i < n; ++i)
+    if (p_[i].allFinite()) {
+      lo = lo.cwiseMin(p_[i]);
+      hi = hi.cwiseMax(p_[i]);
+    }
+  (hi - lo).maxCoeff(&cut_axis_);
+  std::vector<double> x;
+  x.reserve(stats_.points);
+  for (size_t i = 0; i < n; ++i)
+    if (p_[i].allFinite()) x.push_back(p_[i][cut_axis_]);
+  cuts_.clear();
+  auto from = x.begin();
+  for (int k = 1; k < regions; ++k) {
+    const auto nth = x.begin() + static_cast<long>(x.size() * k / regions);
+    std::nth_element(from, nth, x.end());
+    cuts_.push_back(*nth);
+    from = nth;
+  }
+  std::vector<double>().swap(x);
+  region_store_.assign(n, 255);
+  for (size_t i = 0; i < n; ++i)
+    if (p_[i].allFinite())
+      region_store_[i] = static_cast<uint8_t>(std::upper_bound(cuts_.begin(), cuts_.end(), p_[i][cut_axis_]) - cuts_.begin());
+  region_ = region_store_.data();
+
+  std::vector<std::unique_ptr<BallPivoting>> workers;
+  for (int k = 0; k < regions; ++k) workers.emplace_back(new BallPivoting(*this, k));
+  std::vector<uint64_t>().swap(dir_edges_);  // rebuilt from the merged faces
+  dir_edge_count_ = 0;
+  for (double r : radii_m) {
+    grid_store_ = std::make_unique<SpatialGrid>(p_store_, 2.0 * r);
+    grid_ = grid_store_.get();
+    std::exception_ptr error;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(std::min(regions, omp_get_max_threads()))
+    for (int k = 0; k < regions; ++k) {
+      try {
+        workers[k]->grid_ = grid_;
+        workers[k]->runPass(r, false);
+      } catch (...) {
+#pragma omp critical
+        error = std::current_exception();
+      }
+    }
+    if (error) std::rethrow_exception(error);
+  }
+  stats_.regions = regions;
+  stats_.region_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // One front: the workers' edges, loops and faces appended (their vertices are disjoint).
+  const auto t1 = std::chrono::steady_clock::now();
+  std::vector<int> edge_offset(regions, 0);
+  stats_.triangles_per_radius.assign(radii_m.size(), 0);
+  stats_.seconds_per_radius.assign(radii_m.size(), 0.0);
+  for (int k = 0; k < regions; ++k) {
+    edge_offset[k] = static_cast<int>(edges_.size());
+    merge(*workers[k]);
+    workers[k].reset();
+  }
+  for (size_t i = 0; i < n; ++i)
+    if (region_[i] != 255 && out_head_[i] >= 0) out_head_[i] += edge_offset[region_[i]];
+  allocDirEdges(stats_.points);
+  for (const auto& f : faces_) {
+    insertDirEdge(edgeKey(f[0], f[1]));
+    insertDirEdge(edgeKey(f[1], f[2]));
+    insertDirEdge(edgeKey(f[2], f[0]));
+  }
+
+  // Seams: the same passes on the edges and seeds within 2 r of a cut (their candidates may lie
+  // across it), and on what these passes add.
+  region_ = nullptr;
+  const size_t merged_faces = faces_.size();
+  seam_first_edge_ = edges_.size();
+  for (size_t k = 0; k < radii_m.size(); ++k) {
+    const double r = radii_m[k];
+    grid_store_ = std::make_unique<SpatialGrid>(p_store_, 2.0 * r);
+    grid_ = grid_store_.get();
+    seam_band_ = 2.0 * r;
+    runPass(r, true);
+    // runPass appended its own entries: fold them into the per-radius sums.
+    stats_.triangles_per_radius[k] += faces_.size() - merged_faces;
+    stats_.seconds_per_radius[k] += stats_.seconds_per_radius.back();
+    stats_.triangles_per_radius.pop_back();
+    stats_.seconds_per_radius.pop_back();
+  }
+  seam_band_ = 0.0;
+  std::vector<uint8_t>().swap(region_store_);
+  stats_.triangles = faces_.size();
+  stats_.seam_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+}
+
+void BallPivoting::merge(BallPivoting& child) {
+  const int e0 = static_cast<int>(edges_.size()), l0 = static_cast<int>(loop_size_.size());
+  for (Edge E : child.edges_) {
+    if (E.next >= 0) E.next += e0;
+    if (E.prev >= 0) E.prev += e0;
+    if (E.next_out >= 0) E.next_out += e0;
+    E.loop += l0;
+    edges_.push_back(E);
+  }
+  loop_size_.insert(loop_size_.end(), child.loop_size_.begin(), child.loop_size_.end());
+  faces_.insert(faces_.end(), child.faces_.begin(), child.faces_.end());
+  pinched_.insert(pinched_.end(), child.pinched_.begin(), child.pinched_.end());
+  const BpaStats& c = child.stats_;
+  stats_.seeds += c.seeds;
+  stats_.pivots += c.pivots;
+  stats_.joins += c.joins;
+  for (int k = 0; k < 4; ++k) stats_.glue[k] += c.glue[k];
+  stats_.refused_interior += c.refused_interior;
+  stats_.refused_edge += c.refused_edge;
+  stats_.pinches += c.pinches;
+  for (size_t k = 0; k < c.triangles_per_radius.size() && k < stats_.triangles_per_radius.size(); ++k) {
+    stats_.triangles_per_radius[k] += c.triangles_per_radius[k];
+    stats_.seconds_per_radius[k] += c.seconds_per_radius[k];
+  }
+}
+
 TriangleMesh BallPivoting::mesh() {
   std::vector<Eigen::Vector3i> faces = faces_;
   // Only a pinch gives a vertex a second fan.
   std::vector<int> pinched = pinched_;
   std::sort(pinched.begin(), pinched.end());
   pinched.erase(std::unique(pinched.begin(), pinched.end()), pinched.end());
-  stats_.dropped_triangles = dropPinchedFans(faces, p_.size(), pinched);
+  stats_.dropped_triangles = dropPinchedFans(faces, num_points_, pinched);
   stats_.triangles = faces.size();
   TriangleMesh mesh;
-  std::vector<int> index(p_.size(), -1);
+  std::vector<int> index(num_points_, -1);
   for (const auto& f : faces)
     for (int k = 0; k < 3; ++k) index[f[k]] = 0;
   stats_.used_points = 0;
-  for (size_t i = 0; i < p_.size(); ++i) {
+  for (size_t i = 0; i < num_points_; ++i) {
     if (index[i] < 0) continue;
     index[i] = static_cast<int>(mesh.vertices.size());
     mesh.vertices.push_back(p_[i].cast<float>());
@@ -470,10 +695,10 @@ std::string BallPivoting::checkFront() const {
     if (count[l] != loop_size_[l])
       return "loop " + std::to_string(l) + ": size " + std::to_string(loop_size_[l]) + " but " +
              std::to_string(count[l]) + " edges";
-  std::vector<int> deg_in(p_.size(), 0);
+  std::vector<int> deg_in(num_points_, 0);
   for (const Edge& E : edges_)
     if (E.state != kRemoved) ++deg_in[E.b];
-  for (size_t v = 0; v < p_.size(); ++v) {
+  for (size_t v = 0; v < num_points_; ++v) {
     int n = 0;
     for (int x = out_head_[v]; x >= 0; x = edges_[x].next_out) {
       if (edges_[x].state == kRemoved) return "vertex " + std::to_string(v) + ": removed edge in its list";
@@ -489,7 +714,7 @@ std::string BallPivoting::checkFront() const {
 TriangleMesh ballPivot(const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector3f>& normals,
                        const std::vector<double>& radii_m, BpaStats* stats) {
   BallPivoting bpa(points, normals);
-  for (double r : radii_m) bpa.pivot(r);
+  bpa.run(radii_m);
   TriangleMesh mesh = bpa.mesh();
   if (stats) *stats = bpa.stats();
   return mesh;

@@ -196,6 +196,80 @@ TEST(BallPivoting, TwoNearbyParallelPlanesStaySeparate) {
   EXPECT_GT(down, 2800u);
 }
 
+// Slabs meshed in parallel and stitched (run() with regions > 1): the same guarantees as one
+// sequential surface, on every synthetic shape, with the seams closed.
+TEST(BallPivoting, SlabsGiveTheSameClosedSphere) {
+  const Samples s = sphere(3000, 1.0f);
+  for (int regions : {2, 3, 5}) {
+    BallPivoting bpa(s.points, s.normals);
+    bpa.run({0.08}, regions);
+    EXPECT_EQ(bpa.stats().regions, regions);
+    EXPECT_EQ(bpa.checkFront(), "") << regions << " slabs";
+    const TriangleMesh m = bpa.mesh();
+    const MeshTopology t = analyzeTopology(m);
+    EXPECT_EQ(t.vertices, 3000u) << regions << " slabs";
+    EXPECT_TRUE(t.manifold()) << regions << " slabs";
+    EXPECT_EQ(t.boundary_edges, 0u) << regions << " slabs";
+    EXPECT_EQ(t.components, 1u) << regions << " slabs";
+    EXPECT_EQ(t.euler(), 2) << regions << " slabs";
+    EXPECT_EQ(misorientedFaces(m), 0u);
+    EXPECT_NEAR(signedVolume(m), 4.0 / 3.0 * M_PI, 0.05);
+    EXPECT_EQ(bpa.stats().triangles, m.faces.size());
+  }
+}
+
+TEST(BallPivoting, SlabsCubeWithTwoRadiiAndPlaneWithHole) {
+  const Samples c = cube(1.0f, 20, 3);
+  BallPivoting bpa(c.points, c.normals);
+  bpa.run({0.045, 0.09}, 3);
+  EXPECT_EQ(bpa.checkFront(), "");
+  const TriangleMesh m = bpa.mesh();
+  const MeshTopology t = analyzeTopology(m);
+  EXPECT_TRUE(t.manifold());
+  EXPECT_EQ(t.boundary_edges, 0u);
+  EXPECT_EQ(t.euler(), 2);
+  EXPECT_EQ(t.vertices, c.points.size());
+  EXPECT_NEAR(signedVolume(m), 1.0, 0.08);
+  ASSERT_EQ(bpa.stats().triangles_per_radius.size(), 2u);
+  EXPECT_LE(bpa.stats().triangles_per_radius[0], bpa.stats().triangles_per_radius[1]);
+  EXPECT_EQ(bpa.stats().triangles_per_radius[1], bpa.stats().triangles);
+
+  const float hole = 0.2f;
+  const Samples s = plane(1.0f, 40, 0.0f, 1.0f, hole, 5);
+  BallPivoting plate(s.points, s.normals);
+  plate.run({0.03, 0.045}, 4);
+  EXPECT_EQ(plate.checkFront(), "");
+  const TriangleMesh pm = plate.mesh();
+  const MeshTopology pt = analyzeTopology(pm);
+  EXPECT_TRUE(pt.manifold());
+  EXPECT_EQ(pt.components, 1u);
+  EXPECT_EQ(pt.boundary_loops, 2u);
+  EXPECT_EQ(pt.euler(), 0);
+  EXPECT_EQ(pt.vertices, s.points.size());
+  for (size_t i = 0; i < pm.faces.size(); ++i) {
+    const auto& f = pm.faces[i];
+    const Eigen::Vector3f ctr = (pm.vertices[f[0]] + pm.vertices[f[1]] + pm.vertices[f[2]]) / 3.0f;
+    EXPECT_GT((ctr.head<2>() - Eigen::Vector2f(0.5f, 0.5f)).norm(), hole - 0.05f) << "face " << i << " covers the hole";
+  }
+}
+
+TEST(BallPivoting, SlabsAreDeterministicAndRunChecksItsArguments) {
+  const Samples s = sphere(2000, 1.0f);
+  BallPivoting a(s.points, s.normals), b(s.points, s.normals);
+  a.run({0.1}, 4);
+  b.run({0.1}, 4);
+  EXPECT_EQ(a.faces(), b.faces());
+  BallPivoting c(s.points, s.normals);
+  EXPECT_THROW(c.run({0.1}, -1), std::invalid_argument);
+  EXPECT_THROW(c.run({0.1, 0.05}, 2), std::invalid_argument);
+  EXPECT_THROW(c.run({std::nan("")}, 2), std::invalid_argument);
+  EXPECT_TRUE(c.faces().empty());
+  EXPECT_EQ(BallPivoting::automaticRegions(100000), 1);
+  EXPECT_EQ(BallPivoting::automaticRegions(1000000), 2);
+  EXPECT_EQ(BallPivoting::automaticRegions(4000000), 4);
+  EXPECT_EQ(BallPivoting::automaticRegions(40000000), 4);
+}
+
 TEST(BallPivoting, PointsWithoutNormalAreSkipped) {
   Samples s = plane(1.0f, 20, 0.0f, 1.0f, 0.0f, 9);
   s.normals[10] = Eigen::Vector3f::Constant(std::nanf(""));
@@ -280,4 +354,24 @@ TEST(BallPivoting, StanfordBunny) {
   EXPECT_LT(d.mean_m, 1e-4);
   // All four glue cases occur on real data.
   for (int c = 0; c < 4; ++c) EXPECT_GT(bpa.stats().glue[c], 0u) << "glue case " << c + 1;
+}
+
+// The bunny cut into four slabs meshed in parallel and stitched: the same quality targets.
+TEST(BallPivoting, StanfordBunnyInSlabs) {
+  const TriangleMesh ref = readPly(sharedDataPath("bunny/bun_zipper.ply"));
+  const std::vector<Eigen::Vector3f> normals = vertexNormalsFromFaces(ref);
+  BallPivoting bpa(ref.vertices, normals);
+  bpa.run({0.0012, 0.0024, 0.0048}, 4);
+  EXPECT_EQ(bpa.stats().regions, 4);
+  EXPECT_EQ(bpa.checkFront(), "");
+  const TriangleMesh m = bpa.mesh();
+  const MeshTopology t = analyzeTopology(m);
+  std::cout << "bunny in 4 slabs: " << m.faces.size() << " triangles (slabs " << bpa.stats().region_seconds
+            << " s, seams " << bpa.stats().seam_seconds << " s)" << std::endl;
+  EXPECT_GE(m.faces.size(), static_cast<size_t>(std::ceil(0.95 * 69451)));
+  EXPECT_EQ(t.nonmanifold_edges, 0u);
+  EXPECT_EQ(t.nonmanifold_vertices, 0u);
+  EXPECT_EQ(t.inconsistent_edges, 0u);
+  EXPECT_EQ(misorientedFaces(m), 0u);
+  EXPECT_LT(distanceToSurface(sampleFaces(m), ref).mean_m, 1e-4);
 }

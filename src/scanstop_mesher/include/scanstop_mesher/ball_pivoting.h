@@ -18,6 +18,13 @@
 /// last pass, the triangles of all but its largest fan are dropped (counted in the stats).
 /// Several radii in increasing order run one after the other on the same surface, the boundary
 /// re-activated between passes.
+///
+/// Large inputs (run()): the points are cut into slabs along their longest axis (equal point
+/// counts), each slab is meshed by all passes on its own OpenMP thread (its points are the only
+/// vertices it may use; every point still counts for the empty-ball test, so each slab's triangles
+/// are valid Ball Pivoting triangles), then the slabs are merged into one front and the seams are
+/// stitched by the same passes restricted to the edges and seeds within 2 r of a cut. The result
+/// depends on the number of slabs, not on the number of threads (deterministic).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -47,7 +54,10 @@ struct BpaStats {
   size_t pinches = 0;               ///< joins at a front vertex outside the pivot edge's fan
   size_t dropped_triangles = 0;     ///< triangles dropped by mesh() at vertices still pinched
   std::vector<size_t> triangles_per_radius;  ///< triangles after each pass
-  std::vector<double> seconds_per_radius;    ///< wall time of each pass [s]
+  std::vector<double> seconds_per_radius;    ///< wall time of each pass [s] (with slabs: summed over slabs + seam)
+  int regions = 1;                  ///< slabs meshed in parallel (1 = sequential)
+  double region_seconds = 0.0;      ///< wall time of the parallel slab phase [s]
+  double seam_seconds = 0.0;        ///< wall time of merging and stitching the seams [s]
 };
 
 /// One Ball Pivoting surface on a fixed point set. Call pivot(r) with increasing radii.
@@ -63,6 +73,16 @@ class BallPivoting {
   /// existing boundary is re-activated, pivoted, and new seeds are searched until none is left.
   /// Throws std::invalid_argument for a bad radius.
   void pivot(double radius_m);
+
+  /// Runs the passes for radii_m (increasing, as pivot()). On a fresh object with regions != 1 the
+  /// points are cut into slabs meshed in parallel and stitched (see above); regions = 0 chooses
+  /// automaticRegions(). After earlier pivot() calls, or with regions = 1, it is pivot() per radius.
+  /// Throws std::invalid_argument for bad radii or regions < 0.
+  void run(const std::vector<double>& radii_m, int regions = 0);
+
+  /// The number of slabs run() uses by default for this many points: one per 500 000 points,
+  /// 1 to 4 (small inputs stay sequential).
+  static int automaticRegions(size_t points);
 
   /// Faces so far (indices into the input points), counter-clockwise seen from the normals' side.
   const std::vector<Eigen::Vector3i>& faces() const { return faces_; }
@@ -87,6 +107,10 @@ class BallPivoting {
     uint8_t state;  ///< see .cpp
   };
 
+  /// A slab worker of `parent`: shares its points, grid and per-vertex arrays (its vertices are
+  /// only those of its slab, so the workers write disjoint elements).
+  BallPivoting(BallPivoting& parent, int region);
+
   /// Centre of the ball of the current radius on the side of triangle (a, b, c)'s normal; false
   /// when there is none (or, with check_normals, when a corner's normal disagrees).
   bool ballCenter(int a, int b, int c, Eigen::Vector3d& center, bool check_normals) const;
@@ -103,13 +127,34 @@ class BallPivoting {
   void relabel(int start, int loop);
   bool edgeUsed(int a, int b) const;
   void addFace(int a, int b, int c);
+  /// One pass on the grid already set (grid_): re-activates the boundary edges that pass `activate`,
+  /// pivots, and searches seeds among the points that pass seedable().
+  void runPass(double radius_m, bool seam);
+  bool mine(int v) const { return region_id_ < 0 || region_[v] == region_id_; }
+  bool nearCut(int v) const;
+  void runRegions(const std::vector<double>& radii_m, int regions);
+  void merge(BallPivoting& child);
+  void allocDirEdges(size_t keys);
 
-  std::vector<Eigen::Vector3d> p_;
-  std::vector<Eigen::Vector3d> n_;
-  std::vector<uint8_t> valid_;
-  std::vector<uint8_t> used_;
-  std::vector<int> out_head_;  ///< first front edge leaving each vertex, -1 if none
-  std::vector<int> front_deg_; ///< front edges leaving each vertex
+  // Point data and per-vertex state; a slab worker points to its parent's arrays.
+  std::vector<Eigen::Vector3d> p_store_, n_store_;
+  std::vector<uint8_t> used_store_;
+  std::vector<int> out_head_store_, front_deg_store_;
+  size_t num_points_ = 0;
+  const Eigen::Vector3d* p_ = nullptr;
+  const Eigen::Vector3d* n_ = nullptr;
+  uint8_t* used_ = nullptr;
+  int* out_head_ = nullptr;   ///< first front edge leaving each vertex, -1 if none
+  int* front_deg_ = nullptr;  ///< front edges leaving each vertex
+  // Slabs: region of each point, the cuts along axis cut_axis_; region_id_ >= 0 in a slab worker.
+  std::vector<uint8_t> region_store_;
+  const uint8_t* region_ = nullptr;
+  int region_id_ = -1;
+  int cut_axis_ = 0;
+  std::vector<double> cuts_;
+  double seam_band_ = 0.0;  ///< > 0 in the seam phase: only edges and seeds this close to a cut [m]
+  size_t seam_first_edge_ = 0;
+
   std::vector<Edge> edges_;
   std::vector<int> loop_size_;
   std::vector<int> active_;    ///< queue of edge ids (FIFO via head_)
@@ -121,15 +166,23 @@ class BallPivoting {
   double radius_ = 0.0;
   BpaStats stats_;
   // per pass
-  std::unique_ptr<SpatialGrid> grid_;
+  std::unique_ptr<SpatialGrid> grid_store_;
+  const SpatialGrid* grid_ = nullptr;
   size_t seed_cursor_ = 0;
   std::vector<uint32_t> scratch_;
   struct Candidate {
     double angle;
     int q;
     Eigen::Vector3d center;
+    double dist2;  ///< squared distance of q to the pivot edge's midpoint (ties of the angle)
   };
   std::vector<Candidate> candidates_;
+  struct LensPoint {
+    Eigen::Vector3d p;
+    double di2, dj2;  ///< squared distances to the pivot edge's end points
+    int q;
+  };
+  std::vector<LensPoint> lens_;
   std::vector<std::pair<double, int>> seed_near_;
   bool insertDirEdge(uint64_t key);
   bool hasDirEdge(uint64_t key) const;
