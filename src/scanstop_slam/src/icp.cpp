@@ -156,12 +156,21 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
     }
   };
   scan(0, 0, 0);
-  // Rings of neighbour voxels out to the radius (one ring when radius <= voxel).
+  // Shells of neighbour voxels out to the radius (one shell when radius <= voxel), nearest shell
+  // first: every voxel of shell k is at least (k - 1) voxels plus q's smallest offset to a face of
+  // its own voxel away, so once the best point is closer than that no farther shell can hold a
+  // closer one (exact, and a small voxel with a large radius costs what the points near q cost).
   const int rings = std::max(1, static_cast<int>(std::ceil(radius_m / voxel_ - 1e-9)));
-  for (int dx = -rings; dx <= rings; ++dx)
-    for (int dy = -rings; dy <= rings; ++dy)
-      for (int dz = -rings; dz <= rings; ++dz)
-        if (dx != 0 || dy != 0 || dz != 0) scan(dx, dy, dz);
+  const float face = std::min({lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]});
+  for (int k = 1; k <= rings; ++k) {
+    const float shell = (k - 1) * vs + face;
+    if (shell * shell >= best) break;
+    for (int dx = -k; dx <= k; ++dx)
+      for (int dy = -k; dy <= k; ++dy) {
+        const bool side = dx == -k || dx == k || dy == -k || dy == k;
+        for (int dz = -k; dz <= k; dz += side ? 1 : 2 * k) scan(dx, dy, dz);  // the shell's surface only
+      }
+  }
   dist2 = best;
   return found;
 }

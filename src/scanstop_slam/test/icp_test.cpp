@@ -149,6 +149,42 @@ TEST(VoxelMap, MarksHorizontalSurfaces) {
   EXPECT_FALSE(horizontal);  // wall
 }
 
+TEST(VoxelMap, NearestIsExactForRadiiUpToSeveralVoxels) {
+  // Sparse clustered points and queries anywhere: the shell-by-shell search with its early stop
+  // must find what a scan of every point finds, for radii below, at and several times the voxel.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), n(-0.03f, 0.03f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int c = 0; c < 40; ++c) {
+    const Eigen::Vector3f centre(u(rng), u(rng), u(rng));
+    for (int i = 0; i < 20; ++i) pts.emplace_back(centre + Eigen::Vector3f(n(rng), n(rng), n(rng)));
+  }
+  VoxelMap map(0.1, 1000);
+  map.add(pts);
+  int found_count = 0;
+  for (double radius : {0.05, 0.1, 0.25, 0.45}) {
+    for (int q = 0; q < 2000; ++q) {
+      const Eigen::Vector3f query(u(rng), u(rng), u(rng));
+      float brute = static_cast<float>(radius * radius);
+      bool brute_found = false;
+      for (const auto& p : pts) {
+        const float d2 = (p - query).squaredNorm();
+        if (d2 < brute) brute = d2, brute_found = true;
+      }
+      Eigen::Vector3f out;
+      float d2 = 0.0f;
+      const bool found = map.nearest(query, radius, out, d2);
+      ASSERT_EQ(found, brute_found) << "radius " << radius << " query " << query.transpose();
+      if (found) {
+        EXPECT_FLOAT_EQ(d2, brute);
+        EXPECT_FLOAT_EQ((out - query).squaredNorm(), brute);
+        ++found_count;
+      }
+    }
+  }
+  EXPECT_GT(found_count, 1000);  // the radii both find and miss
+}
+
 TEST(Icp, AccelerationAndWallsOnlyReachTheOptimumWhereTheThesisCriterionStopsShort) {
   // Floor and ceiling points pair up with themselves and hold point-to-point ICP back: every step
   // is a fraction of the way, soon below t_c / r_c, and the thesis' criterion stops early.
