@@ -148,8 +148,8 @@ int meshMap(int argc, char** argv) {
   for (double s : r.stats.seconds_per_radius) std::printf(" %.2f", s);
   std::printf(")\n");
   if (r.stats.regions > 1)
-    std::printf("%-34s %9.3f s in %d slabs in parallel, %.3f s merge and seams\n", "  of which", r.stats.region_seconds,
-                r.stats.regions, r.stats.seam_seconds);
+    std::printf("%-34s %9.3f s in %d slabs in parallel, %.3f s merge and seams, %.3f s mesh\n", "  of which",
+                r.stats.region_seconds, r.stats.regions, r.stats.seam_seconds, r.stats.mesh_seconds);
   if (!out.empty()) writeMesh(out, r.mesh);
   return 0;
 }

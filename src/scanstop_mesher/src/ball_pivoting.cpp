@@ -45,18 +45,52 @@ BallPivoting::BallPivoting(const std::vector<Eigen::Vector3f>& points, const std
   num_points_ = n;
   p_store_.resize(n);
   n_store_.resize(n);
+  // Internal order: the usable points by Morton code (1/2^20 of the extent per step), then the others.
+  std::vector<uint8_t> ok(n, 0);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d p = points[i].cast<double>();
-    const Eigen::Vector3d nn = normals[i].cast<double>();
-    const double len = nn.norm();
-    if (p.allFinite() && nn.allFinite() && len > 1e-6) {
-      p_store_[i] = p;
-      n_store_[i] = nn / len;
+    const double len = normals[i].cast<double>().norm();
+    ok[i] = points[i].allFinite() && normals[i].allFinite() && len > 1e-6;
+    if (!ok[i]) continue;
+    lo = lo.cwiseMin(points[i].cast<double>());
+    hi = hi.cwiseMax(points[i].cast<double>());
+  }
+  const double step = std::max((hi - lo).maxCoeff(), 1e-9) / double((1 << 20) - 1);
+  auto spread = [](uint64_t x) {  // bits of x at every third position
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  };
+  std::vector<std::pair<uint64_t, int>> order;
+  order.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (!ok[i]) continue;
+    const Eigen::Vector3d c = ((points[i].cast<double>() - lo) / step).array().floor();
+    order.emplace_back(spread(static_cast<uint64_t>(c[0])) | spread(static_cast<uint64_t>(c[1])) << 1 |
+                           spread(static_cast<uint64_t>(c[2])) << 2,
+                       static_cast<int>(i));
+  }
+  std::sort(order.begin(), order.end());
+  perm_.reserve(n);
+  for (const auto& o : order) perm_.push_back(o.second);
+  std::vector<std::pair<uint64_t, int>>().swap(order);
+  for (size_t i = 0; i < n; ++i)
+    if (!ok[i]) perm_.push_back(static_cast<int>(i));
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = static_cast<size_t>(perm_[k]);
+    if (ok[i]) {
+      const Eigen::Vector3d nn = normals[i].cast<double>();
+      p_store_[k] = points[i].cast<double>();
+      n_store_[k] = nn / nn.norm();
       ++stats_.points;
     } else {
       // Left out of the grid: such a point neither becomes a vertex nor blocks a ball.
-      p_store_[i] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-      n_store_[i] = Eigen::Vector3d::Zero();
+      p_store_[k] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+      n_store_[k] = Eigen::Vector3d::Zero();
     }
   }
   used_store_.assign(n, 0);
@@ -67,7 +101,7 @@ BallPivoting::BallPivoting(const std::vector<Eigen::Vector3f>& points, const std
   used_ = used_store_.data();
   out_head_ = out_head_store_.data();
   front_deg_ = front_deg_store_.data();
-  allocDirEdges(n);
+  // The directed-edge set is allocated by the first pass (run() in slabs sizes its own).
   edges_.reserve(4 * n);
   faces_.reserve(2 * n);
 }
@@ -90,9 +124,10 @@ BallPivoting::BallPivoting(BallPivoting& parent, int region)
 }
 
 void BallPivoting::allocDirEdges(size_t points) {
-  // About 2 triangles, 6 directed edges and 4 front edges per point on a closed surface.
+  // About 2 triangles, 6 directed edges and 4 front edges per point on a closed surface; a map
+  // (thick noisy walls) uses about half its points: 3 directed edges per point. Grows when half full.
   size_t cap = 1024;
-  while (cap < 16 * points) cap *= 2;
+  while (cap < 8 * points) cap *= 2;
   dir_edges_.assign(cap, kEmptyKey);
   dir_edge_count_ = 0;
 }
@@ -103,7 +138,7 @@ bool BallPivoting::insertDirEdge(uint64_t key) {
   if (2 * (dir_edge_count_ + 1) > dir_edges_.size()) {
     std::vector<uint64_t> old;
     old.swap(dir_edges_);
-    dir_edges_.assign(old.size() * 2, kEmptyKey);
+    dir_edges_.assign(std::max<size_t>(1024, old.size() * 2), kEmptyKey);
     dir_edge_count_ = 0;
     for (uint64_t k : old)
       if (k != kEmptyKey) insertDirEdge(k);
@@ -120,6 +155,7 @@ bool BallPivoting::insertDirEdge(uint64_t key) {
 }
 
 bool BallPivoting::hasDirEdge(uint64_t key) const {
+  if (dir_edges_.empty()) return false;
   const size_t mask = dir_edges_.size() - 1;
   for (size_t h = hashKey(key) & mask;; h = (h + 1) & mask) {
     if (dir_edges_[h] == key) return true;
@@ -342,8 +378,7 @@ void BallPivoting::pivotEdge(int e) {
   const double reach2 = 4.0 * r2;
   std::vector<LensPoint>& lens = lens_;
   lens.clear();
-  grid_->forEachWithin(m, radius_ + rho, [&](uint32_t uq) {
-    const Eigen::Vector3d& q = p_[uq];
+  grid_->forEachPointWithin(m, radius_ + rho, [&](uint32_t uq, const Eigen::Vector3d& q) {
     const double di2 = (q - pi).squaredNorm();
     if (di2 > reach2) return;
     const double dj2 = (q - pj).squaredNorm();
@@ -466,6 +501,7 @@ void BallPivoting::pivot(double radius_m) {
   if (radius_m < radius_)
     throw std::invalid_argument("BallPivoting: radii must increase (" + std::to_string(radius_m) + " after " +
                                 std::to_string(radius_) + ")");
+  if (dir_edges_.empty()) allocDirEdges(stats_.points);
   grid_store_ = std::make_unique<SpatialGrid>(p_store_, 2.0 * radius_m);
   grid_ = grid_store_.get();
   runPass(radius_m, false);
@@ -650,7 +686,15 @@ void BallPivoting::merge(BallPivoting& child) {
   }
 }
 
+std::vector<Eigen::Vector3i> BallPivoting::faces() const {
+  std::vector<Eigen::Vector3i> out;
+  out.reserve(faces_.size());
+  for (const auto& f : faces_) out.emplace_back(perm_[f[0]], perm_[f[1]], perm_[f[2]]);
+  return out;
+}
+
 TriangleMesh BallPivoting::mesh() {
+  const auto t0 = std::chrono::steady_clock::now();
   std::vector<Eigen::Vector3i> faces = faces_;
   // Only a pinch gives a vertex a second fan.
   std::vector<int> pinched = pinched_;
@@ -659,19 +703,23 @@ TriangleMesh BallPivoting::mesh() {
   stats_.dropped_triangles = dropPinchedFans(faces, num_points_, pinched);
   stats_.triangles = faces.size();
   TriangleMesh mesh;
+  // Vertices in input order (index by input index).
   std::vector<int> index(num_points_, -1);
   for (const auto& f : faces)
-    for (int k = 0; k < 3; ++k) index[f[k]] = 0;
+    for (int k = 0; k < 3; ++k) index[perm_[f[k]]] = 0;
+  std::vector<int> internal(num_points_, -1);
+  for (size_t k = 0; k < num_points_; ++k) internal[perm_[k]] = static_cast<int>(k);
   stats_.used_points = 0;
   for (size_t i = 0; i < num_points_; ++i) {
     if (index[i] < 0) continue;
     index[i] = static_cast<int>(mesh.vertices.size());
-    mesh.vertices.push_back(p_[i].cast<float>());
-    mesh.normals.push_back(n_[i].cast<float>());
+    mesh.vertices.push_back(p_[internal[i]].cast<float>());
+    mesh.normals.push_back(n_[internal[i]].cast<float>());
     ++stats_.used_points;
   }
   mesh.faces.reserve(faces.size());
-  for (const auto& f : faces) mesh.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
+  for (const auto& f : faces) mesh.faces.emplace_back(index[perm_[f[0]]], index[perm_[f[1]]], index[perm_[f[2]]]);
+  stats_.mesh_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return mesh;
 }
 

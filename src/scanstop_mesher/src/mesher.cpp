@@ -247,8 +247,8 @@ size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors, bool
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       double sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
       int count = 0;
-      grid.forEachWithin(pi, radius_m, [&](uint32_t j) {
-        const Eigen::Vector3d d = p[j] - pi;
+      grid.forEachPointWithin(pi, radius_m, [&](uint32_t, const Eigen::Vector3d& q) {
+        const Eigen::Vector3d d = q - pi;
         sum += d;
         sxx += d.x() * d.x();
         sxy += d.x() * d.y();

@@ -58,6 +58,7 @@ struct BpaStats {
   int regions = 1;                  ///< slabs meshed in parallel (1 = sequential)
   double region_seconds = 0.0;      ///< wall time of the parallel slab phase [s]
   double seam_seconds = 0.0;        ///< wall time of merging and stitching the seams [s]
+  double mesh_seconds = 0.0;        ///< wall time of mesh(): dropping pinched fans, building the mesh [s]
 };
 
 /// One Ball Pivoting surface on a fixed point set. Call pivot(r) with increasing radii.
@@ -85,7 +86,7 @@ class BallPivoting {
   static int automaticRegions(size_t points);
 
   /// Faces so far (indices into the input points), counter-clockwise seen from the normals' side.
-  const std::vector<Eigen::Vector3i>& faces() const { return faces_; }
+  std::vector<Eigen::Vector3i> faces() const;
   const BpaStats& stats() const { return stats_; }
 
   /// The mesh with only the used points as vertices (with their normals); triangles of all but the
@@ -136,7 +137,10 @@ class BallPivoting {
   void merge(BallPivoting& child);
   void allocDirEdges(size_t keys);
 
-  // Point data and per-vertex state; a slab worker points to its parent's arrays.
+  // Point data and per-vertex state in a spatially coherent order (Morton order of the points, so
+  // that grid queries read nearby memory); perm_[internal] = input index. A slab worker points to
+  // its parent's arrays.
+  std::vector<int> perm_;
   std::vector<Eigen::Vector3d> p_store_, n_store_;
   std::vector<uint8_t> used_store_;
   std::vector<int> out_head_store_, front_deg_store_;

@@ -23,6 +23,12 @@ class SpatialGrid {
   /// Calls f(index) for every point within radius_m (inclusive) of center.
   template <typename F>
   void forEachWithin(const Eigen::Vector3d& center, double radius_m, F&& f) const {
+    forEachPointWithin(center, radius_m, [&f](uint32_t idx, const Eigen::Vector3d&) { f(idx); });
+  }
+
+  /// Calls f(index, point) for every point within radius_m (inclusive) of center.
+  template <typename F>
+  void forEachPointWithin(const Eigen::Vector3d& center, double radius_m, F&& f) const {
     if (order_.empty()) return;
     const double r2 = radius_m * radius_m;
     int lo[3], hi[3];
@@ -39,7 +45,8 @@ class SpatialGrid {
         const uint32_t begin = start_[row + lo[0]], end = start_[row + hi[0] + 1];
         for (uint32_t k = begin; k < end; ++k) {
           const uint32_t idx = order_[k];
-          if ((points_[idx] - center).squaredNorm() <= r2) f(idx);
+          const Eigen::Vector3d& p = points_[idx];
+          if ((p - center).squaredNorm() <= r2) f(idx, p);
         }
       }
   }
