@@ -49,6 +49,8 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "min_floor_points", c.floor.min_floor_points);
   optional(pnh, "min_obstacle_points", c.floor.min_obstacle_points);
   optional(pnh, "floor_fill_radius_m", c.floor.floor_fill_radius_m);
+  optional(pnh, "speckle_min_points", c.floor.speckle_min_points);
+  optional(pnh, "speckle_max_cells", c.floor.speckle_max_cells);
   optional(pnh, "robot_radius_m", c.planner.robot_radius_m);
   optional(pnh, "d_max_m", c.planner.d_max_m);
   optional(pnh, "k_r_m", c.planner.k_r_m);
@@ -56,6 +58,8 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "c0", c.planner.c0);
   optional(pnh, "knowledge_threshold", c.planner.knowledge_threshold);
   optional(pnh, "frontier_distance_m", c.planner.frontier_distance_m);
+  optional(pnh, "occluded_frontier_knowledge", c.planner.occluded_frontier_knowledge);
+  optional(pnh, "occluded_frontier_min_m", c.planner.occluded_frontier_min_m);
   optional(pnh, "start_snap_m", c.planner.start_snap_m);
   optional(pnh, "max_coverage_landmarks", c.planner.max_coverage_landmarks);
   optional(pnh, "known_free_radius_m", c.known_free_radius_m);

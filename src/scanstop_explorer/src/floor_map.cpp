@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
@@ -22,6 +24,8 @@ void FloorConfig::validate() const {
   requireInRange("grid_margin_m", grid_margin_m, 0.0, 20.0, "m");
   requireInRange("min_floor_points", min_floor_points, 1, 1000);
   requireInRange("min_obstacle_points", min_obstacle_points, 1, 1000);
+  requireInRange("speckle_min_points", speckle_min_points, 1, 1000);
+  requireInRange("speckle_max_cells", speckle_max_cells, 1, 100);
   requireInRange("max_extent_m", max_extent_m, 1e-3, 1e4, "m");
   requireInRange("floor_fill_radius_m", floor_fill_radius_m, 0.0, 1.0, "m");
 }
@@ -54,16 +58,19 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
   g.width = static_cast<int>(ix1 - ix0);
   g.height = static_cast<int>(iy1 - iy0);
   cv::Mat floor = cv::Mat::zeros(g.height, g.width, CV_32S), obstacle = cv::Mat::zeros(g.height, g.width, CV_32S);
+  cv::Mat obstacle_max = cv::Mat::zeros(g.height, g.width, CV_32S);
   if (!empty()) {
     const int dx = static_cast<int>(std::lround((geometry_.origin_x - g.origin_x) / res));
     const int dy = static_cast<int>(std::lround((geometry_.origin_y - g.origin_y) / res));
     const cv::Rect roi(dx, dy, geometry_.width, geometry_.height);
     floor_hits_.copyTo(floor(roi));
     obstacle_hits_.copyTo(obstacle(roi));
+    obstacle_max_.copyTo(obstacle_max(roi));
   }
   geometry_ = g;
   floor_hits_ = floor;
   obstacle_hits_ = obstacle;
+  obstacle_max_ = obstacle_max;
 }
 
 size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
@@ -99,8 +106,10 @@ size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
   for (size_t i = 0; i < obstacle_cells.size();) {
     size_t j = i;
     while (j < obstacle_cells.size() && obstacle_cells[j].first == obstacle_cells[i].first) ++j;
-    if (static_cast<int>(j - i) >= config_.min_obstacle_points)
-      obstacle_hits_.at<int>(obstacle_cells[i].first / geometry_.width, obstacle_cells[i].first % geometry_.width)++;
+    const int row = obstacle_cells[i].first / geometry_.width, col = obstacle_cells[i].first % geometry_.width;
+    const int n = static_cast<int>(j - i);
+    if (n >= config_.min_obstacle_points) obstacle_hits_.at<int>(row, col)++;
+    obstacle_max_.at<int>(row, col) = std::max(obstacle_max_.at<int>(row, col), n);
     i = j;
   }
   return used;
@@ -114,12 +123,16 @@ void FloorMap::addKnownFree(const Eigen::Vector2d& center_map, double radius_m) 
 
 cv::Mat FloorMap::states() const {
   cv::Mat s = cv::Mat::zeros(geometry_.height, geometry_.width, CV_8U);
+  if (empty()) return s;
+  cv::Mat obstacle = obstacle_hits_ > 0;
+  if (config_.speckle_min_points > config_.min_obstacle_points)
+    removeObstacleSpeckle(obstacle, obstacle_max_, config_.speckle_min_points, config_.speckle_max_cells);
   for (int r = 0; r < geometry_.height; ++r) {
     const int* f = floor_hits_.ptr<int>(r);
-    const int* o = obstacle_hits_.ptr<int>(r);
+    const uint8_t* o = obstacle.ptr<uint8_t>(r);
     uint8_t* out = s.ptr<uint8_t>(r);
     for (int c = 0; c < geometry_.width; ++c) {
-      if (o[c] > 0) out[c] = kObstacle;
+      if (o[c]) out[c] = kObstacle;
       else if (f[c] >= config_.min_floor_points) out[c] = kFloor;
     }
   }
@@ -141,6 +154,32 @@ cv::Mat FloorMap::states() const {
   s.setTo(kFloor, add);
   fillFloorGaps(s, config_.floor_fill_radius_m / config_.resolution_m);
   return s;
+}
+
+int removeObstacleSpeckle(cv::Mat& obstacle, const cv::Mat& max_points, int min_points, int max_cells) {
+  if (obstacle.empty()) return 0;
+  if (obstacle.type() != CV_8U || max_points.type() != CV_32S || max_points.size() != obstacle.size())
+    throw std::invalid_argument("removeObstacleSpeckle: obstacle must be CV_8U and max_points CV_32S of the same size");
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(obstacle != 0, labels, stats, centroids, 8, CV_32S);
+  std::vector<uint8_t> strong(n, 0);
+  for (int r = 0; r < obstacle.rows; ++r) {
+    const int* l = labels.ptr<int>(r);
+    const int* m = max_points.ptr<int>(r);
+    for (int c = 0; c < obstacle.cols; ++c)
+      if (l[c] > 0 && m[c] >= min_points) strong[l[c]] = 1;
+  }
+  int cleared = 0;
+  for (int r = 0; r < obstacle.rows; ++r) {
+    const int* l = labels.ptr<int>(r);
+    uint8_t* o = obstacle.ptr<uint8_t>(r);
+    for (int c = 0; c < obstacle.cols; ++c)
+      if (l[c] > 0 && !strong[l[c]] && stats.at<int>(l[c], cv::CC_STAT_AREA) <= max_cells) {
+        o[c] = 0;
+        ++cleared;
+      }
+  }
+  return cleared;
 }
 
 void fillFloorGaps(cv::Mat& states, double radius_cells) {

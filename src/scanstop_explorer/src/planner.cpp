@@ -68,6 +68,8 @@ void PlannerConfig::validate() const {
   requireInRange("c0", c0, 1e-9, 1e6, "m");
   requireInRange("knowledge_threshold", knowledge_threshold, 1e-9, 1e6);
   requireInRange("frontier_distance_m", frontier_distance_m, 1e-6, 50.0, "m");
+  requireInRange("occluded_frontier_knowledge", occluded_frontier_knowledge, 0.0, 1e6);
+  requireInRange("occluded_frontier_min_m", occluded_frontier_min_m, 0.0, 50.0, "m");
   requireInRange("start_snap_m", start_snap_m, 0.0, 5.0, "m");
   requireInRange("max_coverage_landmarks", max_coverage_landmarks, 0, 1e6);
 }
@@ -440,19 +442,77 @@ cv::Mat frontierCells(const cv::Mat& states) {
   return f;
 }
 
+cv::Mat occludedFrontier(const cv::Mat& states, const GridGeometry& g, const std::vector<Eigen::Vector2d>& scans,
+                         double view_radius_m, double min_extent_cells) {
+  const cv::Mat frontier = frontierCells(states);
+  cv::Mat occluded = frontier.clone();
+  std::vector<cv::Point> scan_cells;
+  for (const Eigen::Vector2d& s : scans) scan_cells.push_back(g.cellOf(s.x(), s.y()));
+  const double r2 = view_radius_m * view_radius_m;
+  // A line may run through this many unknown cells just before the frontier cell (a line at a
+  // grazing angle to a straight frontier enters it early); before them it must cross floor cells
+  // with no obstacle cell beside them (a line that grazes a door jamb does not count as a view).
+  constexpr int kGrazeCells = 2;
+  for (int r = 0; r < states.rows; ++r)
+    for (int c = 0; c < states.cols; ++c) {
+      if (!frontier.at<uint8_t>(r, c)) continue;
+      const Eigen::Vector2d fc = g.center({c, r});
+      for (size_t i = 0; i < scans.size(); ++i) {
+        if ((scans[i] - fc).squaredNorm() > r2 || !inside(states, scan_cells[i])) continue;
+        cv::LineIterator it(states, scan_cells[i], cv::Point(c, r), 4);
+        bool clear = true;
+        for (int k = 0; k + 1 < it.count && clear; ++k, ++it) {
+          const uint8_t v = **it;
+          if (k + 1 + kGrazeCells >= it.count) {
+            clear = v != kObstacle;
+          } else {  // a floor cell with no obstacle beside it (a line grazing a jamb is not clear)
+            clear = v == kFloor;
+            const cv::Point p = it.pos();
+            for (int dy = -1; dy <= 1 && clear; ++dy)
+              for (int dx = -1; dx <= 1 && clear; ++dx) {
+                const cv::Point q(p.x + dx, p.y + dy);
+                clear = !inside(states, q) || states.at<uint8_t>(q) != kObstacle;
+              }
+          }
+        }
+        if (clear) {
+          occluded.at<uint8_t>(r, c) = 0;
+          break;
+        }
+      }
+    }
+  if (min_extent_cells > 1.0) {
+    // Short frontier pieces (8-connected pieces of the whole frontier, so that a shadow edge the
+    // grid traversal calls partly seen stays one piece) do not count.
+    cv::Mat labels, stats, centroids;
+    const int n = cv::connectedComponentsWithStats(frontier, labels, stats, centroids, 8, CV_32S);
+    std::vector<uint8_t> keep(n, 0);
+    for (int l = 1; l < n; ++l)
+      keep[l] = std::max(stats.at<int>(l, cv::CC_STAT_WIDTH), stats.at<int>(l, cv::CC_STAT_HEIGHT)) >= min_extent_cells;
+    for (int r = 0; r < occluded.rows; ++r)
+      for (int c = 0; c < occluded.cols; ++c)
+        if (occluded.at<uint8_t>(r, c) && !keep[labels.at<int>(r, c)]) occluded.at<uint8_t>(r, c) = 0;
+  }
+  return occluded;
+}
+
 cv::Mat openCells(const cv::Mat& states, const cv::Mat& cost_cells, const cv::Mat& knowledge, const cv::Mat& blacklist,
-                  double knowledge_threshold, double frontier_distance_cells) {
+                  double knowledge_threshold, double frontier_distance_cells, const cv::Mat& occluded,
+                  double occluded_knowledge) {
   const cv::Mat frontier = frontierCells(states);
   const cv::Mat sq = squaredDistanceTransform(1 - frontier);
+  const bool use_occluded = !occluded.empty() && occluded_knowledge > knowledge_threshold;
+  const cv::Mat sq_occ = use_occluded ? squaredDistanceTransform(1 - (occluded != 0) / 255) : cv::Mat();
   const double fd2 = frontier_distance_cells * frontier_distance_cells;
   cv::Mat open = cv::Mat::zeros(states.size(), CV_8U);
   for (int r = 0; r < states.rows; ++r)
     for (int c = 0; c < states.cols; ++c) {
       if (!std::isfinite(cost_cells.at<float>(r, c))) continue;
       if (!blacklist.empty() && blacklist.at<uint8_t>(r, c)) continue;
-      if (knowledge.at<float>(r, c) >= knowledge_threshold) continue;
-      if (sq.at<int>(r, c) > fd2) continue;
-      open.at<uint8_t>(r, c) = 1;
+      const float k = knowledge.at<float>(r, c);
+      const bool near_frontier = k < knowledge_threshold && sq.at<int>(r, c) <= fd2;
+      const bool near_occluded = use_occluded && k < occluded_knowledge && sq_occ.at<int>(r, c) <= fd2;
+      if (near_frontier || near_occluded) open.at<uint8_t>(r, c) = 1;
     }
   return open;
 }
@@ -540,8 +600,11 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   const double res_m = g.resolution;
   res.blacklist = rasterizeDiscs(g, in.blacklist);
   res.evaluation = evaluationMap(res.knowledge, res.cost_map.cost, res_m, cfg.k0, cfg.c0, res.blacklist);
+  if (cfg.occluded_frontier_knowledge > cfg.knowledge_threshold)
+    res.occluded_frontier =
+        occludedFrontier(res.states, g, in.scan_positions, cfg.k_r_m, cfg.occluded_frontier_min_m / res_m);
   res.open = openCells(res.states, res.cost_map.cost, res.knowledge, res.blacklist, cfg.knowledge_threshold,
-                       cfg.frontier_distance_m / res_m);
+                       cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge);
   timer.lap("evaluation_and_termination");
   res.open_cells = static_cast<size_t>(cv::countNonZero(res.open));
   const cv::Mat reached = res.cost_map.predecessor >= 0;
@@ -559,12 +622,17 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   if (res.complete) {
     res.complete_reason = "no reachable cell within frontier_distance_m = " + fmt(cfg.frontier_distance_m) +
                           " m of unknown space has knowledge below knowledge_threshold = " +
-                          fmt(cfg.knowledge_threshold) + " (" + std::to_string(n_reached) + " reachable cells, " +
+                          fmt(cfg.knowledge_threshold) +
+                          (res.occluded_frontier.empty()
+                               ? std::string()
+                               : " (below occluded_frontier_knowledge = " + fmt(cfg.occluded_frontier_knowledge) +
+                                     " next to a frontier no scan has in sight)") +
+                          " (" + std::to_string(n_reached) + " reachable cells, " +
                           std::to_string(n_black) + " blacklisted as unreachable)";
     res.message = "exploration complete";
     return;
   }
-  res.target_cell = argmaxCell(res.evaluation, res.knowledge < cfg.knowledge_threshold);
+  res.target_cell = argmaxCell(res.evaluation, (res.knowledge < cfg.knowledge_threshold) | (res.open != 0));
   if (res.target_cell.x < 0) {
     res.complete = true;
     res.complete_reason = "every reachable cell that lacks knowledge is blacklisted as unreachable (" +

@@ -49,7 +49,10 @@ TEST(FloorMap, LayersMarkFloorObstaclesAndUnknown) {
 
 TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
   FloorMap fm;
-  fm.addPoints({{0.51f, 0.51f, 0.0f}, {1.01f, 0.51f, 0.3f}, {1.02f, 0.52f, 0.5f}});
+  // Five obstacle points in one cell: enough for a lone obstacle cell (speckle_min_points 5), and the
+  // per-cell evidence must survive the growth of the grid.
+  fm.addPoints({{0.51f, 0.51f, 0.0f}, {1.01f, 0.51f, 0.3f}, {1.02f, 0.52f, 0.5f}, {1.03f, 0.53f, 0.2f},
+                {1.04f, 0.51f, 0.4f}, {1.01f, 0.54f, 0.1f}});
   const GridGeometry g0 = fm.geometry();
   fm.addPoints({{10.02f, -7.98f, 0.0f}});
   const GridGeometry g1 = fm.geometry();
@@ -66,7 +69,9 @@ TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
 }
 
 TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
-  FloorMap fm;  // min_obstacle_points = 2
+  FloorConfig cfg;  // min_obstacle_points = 2
+  cfg.speckle_min_points = 2;  // no speckle removal here (SpeckleRemovalKeepsAThinLegAndClearsStrayPairs)
+  FloorMap fm(cfg);
   for (int scan = 0; scan < 5; ++scan) fm.addPoints({{2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});  // one stray point per scan
   cv::Mat s = fm.states();
   EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kUnknown);
@@ -75,6 +80,7 @@ TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
   EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kObstacle);
   FloorConfig one;
   one.min_obstacle_points = 1;
+  one.speckle_min_points = 1;
   FloorMap fm1(one);
   fm1.addPoints({{2.01f, 2.01f, 0.3f}});
   EXPECT_EQ(fm1.states().at<uint8_t>(fm1.geometry().cellOf(2.01, 2.01)), kObstacle);

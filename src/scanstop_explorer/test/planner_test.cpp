@@ -33,12 +33,13 @@ void expectValidPath(const PlanResult& r, const PlannerConfig& cfg, const std::s
   EXPECT_TRUE(r.scan_at.back()) << what;
   EXPECT_NEAR((r.path.back() - r.target).norm(), 0.0, 1e-9) << what;
   // The target is the argmax of b = 1/(k+k0) * 1/(c+c0) over the reached cells lacking knowledge
-  // (computed here from the cost and knowledge maps).
+  // or open (next to an occluded frontier) (computed here from the cost and knowledge maps).
   double best = 0.0;
   for (int row = 0; row < r.accessible.rows; ++row)
     for (int col = 0; col < r.accessible.cols; ++col) {
       const float c = r.cost_map.cost.at<float>(row, col);
-      if (!std::isfinite(c) || r.knowledge.at<float>(row, col) >= cfg.knowledge_threshold) continue;
+      const bool candidate = r.knowledge.at<float>(row, col) < cfg.knowledge_threshold || r.open.at<uint8_t>(row, col);
+      if (!std::isfinite(c) || !candidate) continue;
       best = std::max(best, 1.0 / (r.knowledge.at<float>(row, col) + cfg.k0) / (c * r.geometry.resolution + cfg.c0));
     }
   EXPECT_NEAR(r.score, best, 1e-6) << what;

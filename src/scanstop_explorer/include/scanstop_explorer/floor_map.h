@@ -22,7 +22,13 @@ enum CellState : uint8_t {
   kUnknown = 0,   ///< no floor and no obstacle point
   kFloor = 1,     ///< floor points only (or known free: the robot stood there)
   kObstacle = 2,  ///< some scan put at least min_obstacle_points points into the robot's height layer
+                  ///< (and the cell is not speckle, see FloorConfig::speckle_min_points)
 };
+
+/// Speckle removal on an obstacle mask (CV_8U, non-zero = obstacle): clears every 8-connected
+/// component of at most max_cells cells whose cells all have max_points (CV_32S, most points one
+/// scan put into the cell) below min_points. Returns the number of cells cleared.
+int removeObstacleSpeckle(cv::Mat& obstacle, const cv::Mat& max_points, int min_points, int max_cells);
 
 /// Parameters of the floor extraction.
 struct FloorConfig {
@@ -34,6 +40,13 @@ struct FloorConfig {
   int min_obstacle_points = 2;    ///< obstacle-layer points ONE scan must put into a cell to make it an
                                   ///< obstacle (real obstacles give many per scan, random outlier
                                   ///< ranges rarely two in one cell), [1, 1000]
+  int speckle_min_points = 5;     ///< speckle removal: an obstacle component (8-connected) of at most
+                                  ///< speckle_max_cells cells none of whose cells got this many
+                                  ///< obstacle-layer points from one scan is a stray reading (noise,
+                                  ///< a random range) and not an obstacle; a real thin obstacle (table
+                                  ///< leg) gives many points per scan or spreads over more cells;
+                                  ///< <= min_obstacle_points: off, [1, 1000]
+  int speckle_max_cells = 2;      ///< largest component that can be speckle, [1, 100]
   double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
   double floor_fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
                                   ///< (morphological closing of the floor over unknown cells only;
@@ -71,6 +84,7 @@ class FloorMap {
   GridGeometry geometry_;
   cv::Mat floor_hits_;     ///< CV_32S
   cv::Mat obstacle_hits_;  ///< CV_32S: scans that made the cell an obstacle
+  cv::Mat obstacle_max_;   ///< CV_32S: most obstacle-layer points one scan put into the cell
   std::vector<std::pair<Eigen::Vector2d, double>> known_free_;  ///< discs (centre [m], radius [m])
 };
 

@@ -24,6 +24,15 @@ struct PlannerConfig {
   double c0 = 3.0;                     ///< cost offset in b [m], (0, 1e6]
   double knowledge_threshold = 1.0;    ///< a cell lacks knowledge when k < this, (0, 1e6]
   double frontier_distance_m = 0.5;    ///< a cell borders unknown space when a frontier cell is this close [m], (0, 50]
+  /// Occluded frontiers (termination and targets): a reached cell near a frontier cell that no scan
+  /// within k_r_m has in plain sight (straight line over floor cells only; e.g. the part of a
+  /// corridor hidden behind the door jambs) stays open until its knowledge reaches this value,
+  /// even if the knowledge disc of a nearby scan covers it. <= knowledge_threshold: off (the
+  /// knowledge rule alone), [0, 1e6]
+  double occluded_frontier_knowledge = 3.0;
+  /// Occluded cells of frontier pieces (8-connected) shorter than this (bounding box extent) are
+  /// ignored: shadows of chair legs and wall corners, not openings the robot could pass [m], [0, 50]
+  double occluded_frontier_min_m = 0.6;
   double start_snap_m = 0.5;           ///< robot off the accessible floor: join it within this distance [m], [0, 5]
   int max_coverage_landmarks = 2000;   ///< bound on the landmarks added for cells no landmark sees, [0, 1e6]
 
@@ -116,11 +125,23 @@ std::vector<std::pair<Eigen::Vector2d, int>> extractPath(const CostMap& cost_map
 
 /// Frontier cells: unknown cells 4-adjacent to a floor cell. CV_8U 0/1.
 cv::Mat frontierCells(const cv::Mat& states);
-/// Open cells (termination): reached cells (finite cost), not blacklisted, with knowledge below
-/// knowledge_threshold, and a frontier cell within frontier_distance_cells. Exploration is
-/// complete when there is none. CV_8U 0/1.
+/// Frontier cells that no scan position within view_radius_m has in plain sight: every straight
+/// line (4-connected cell traversal) from the scan's cell to the frontier cell crosses a cell that
+/// is not floor, or passes beside an obstacle cell (8-neighbour), before reaching it; in the last 2
+/// cells before it only obstacle cells block (a line at a grazing angle enters a straight frontier
+/// early, and a frontier in a wall gap lies beside the wall). Cells of frontier pieces (8-connected) whose
+/// bounding box is smaller than min_extent_cells in both directions are dropped. CV_8U 0/1.
+cv::Mat occludedFrontier(const cv::Mat& states, const GridGeometry& geometry,
+                         const std::vector<Eigen::Vector2d>& scan_positions, double view_radius_m,
+                         double min_extent_cells = 0.0);
+/// Open cells (termination): reached cells (finite cost), not blacklisted, and either with
+/// knowledge below knowledge_threshold and a frontier cell within frontier_distance_cells, or (when
+/// `occluded` is given) with knowledge below occluded_knowledge and a cell of `occluded` (CV_8U
+/// occluded frontier cells) within frontier_distance_cells. Exploration is complete when there is
+/// none. CV_8U 0/1.
 cv::Mat openCells(const cv::Mat& states, const cv::Mat& cost_cells, const cv::Mat& knowledge, const cv::Mat& blacklist,
-                  double knowledge_threshold, double frontier_distance_cells);
+                  double knowledge_threshold, double frontier_distance_cells, const cv::Mat& occluded = cv::Mat(),
+                  double occluded_knowledge = 0.0);
 
 // ---- the whole step -------------------------------------------------------------------------
 
@@ -143,6 +164,7 @@ struct PlanResult {
   bool robot_snapped = false;    ///< the robot was off the accessible floor and joined to robot_cell
 
   cv::Mat states, sq_dt, accessible, anchors, skeleton_unpruned, skeleton, knowledge, blacklist, evaluation, open;
+  cv::Mat occluded_frontier;  ///< frontier cells no scan within k_r has in plain sight (CV_8U; empty when off)
   CostMap cost_map;
 
   // the plan
@@ -168,8 +190,9 @@ struct PlanResult {
 PlanResult computeMaps(const PlanInput& input, const PlannerConfig& config);
 /// Evaluation, termination, target and path on the maps of `result` with the input's blacklist.
 /// The target is the argmax of b among the reached cells that lack knowledge (k <
-/// knowledge_threshold; Algorithm 5 line 10: "low knowledge and low cost"): so every scan removes
-/// candidates and the robot never dithers between already scanned spots.
+/// knowledge_threshold; Algorithm 5 line 10: "low knowledge and low cost") or are open (next to an
+/// occluded frontier): so every scan removes candidates and the robot never dithers between
+/// already scanned spots.
 void choosePlan(PlanResult& result, const PlanInput& input, const PlannerConfig& config);
 /// computeMaps + choosePlan.
 PlanResult planStep(const PlanInput& input, const PlannerConfig& config);
