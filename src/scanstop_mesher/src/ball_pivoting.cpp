@@ -56,23 +56,14 @@ BallPivoting::BallPivoting(const std::vector<Eigen::Vector3f>& points, const std
     hi = hi.cwiseMax(points[i].cast<double>());
   }
   const double step = std::max((hi - lo).maxCoeff(), 1e-9) / double((1 << 20) - 1);
-  auto spread = [](uint64_t x) {  // bits of x at every third position
-    x &= 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffull;
-    x = (x | x << 16) & 0x1f0000ff0000ffull;
-    x = (x | x << 8) & 0x100f00f00f00f00full;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-  };
   std::vector<std::pair<uint64_t, int>> order;
   order.reserve(n);
   for (size_t i = 0; i < n; ++i) {
     if (!ok[i]) continue;
     const Eigen::Vector3d c = ((points[i].cast<double>() - lo) / step).array().floor();
-    order.emplace_back(spread(static_cast<uint64_t>(c[0])) | spread(static_cast<uint64_t>(c[1])) << 1 |
-                           spread(static_cast<uint64_t>(c[2])) << 2,
-                       static_cast<int>(i));
+    order.emplace_back(
+        mortonCode(static_cast<uint64_t>(c[0]), static_cast<uint64_t>(c[1]), static_cast<uint64_t>(c[2])),
+        static_cast<int>(i));
   }
   std::sort(order.begin(), order.end());
   perm_.reserve(n);

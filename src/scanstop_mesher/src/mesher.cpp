@@ -158,7 +158,8 @@ ScanPoints voxelDownsample(const ScanPoints& in, double voxel_m) {
     const Eigen::Vector3d c = ((in.points[i].cast<double>() - lo) / voxel_m).array().floor();
     if ((c.array() >= double(1 << 21)).any())
       throw ConfigError("voxel_m = " + std::to_string(voxel_m) + " m is too small for the extent of the points");
-    keys[i] = {static_cast<uint64_t>(c[0]) | (static_cast<uint64_t>(c[1]) << 21) | (static_cast<uint64_t>(c[2]) << 42),
+    // Morton order: the output (and so normals and Ball Pivoting) reads nearby points from nearby memory.
+    keys[i] = {mortonCode(static_cast<uint64_t>(c[0]), static_cast<uint64_t>(c[1]), static_cast<uint64_t>(c[2])),
                static_cast<uint32_t>(i)};
   }
   std::sort(keys.begin(), keys.end());

@@ -12,6 +12,21 @@
 namespace scanstop {
 namespace mesher {
 
+/// Morton code (bits interleaved x, y, z) of cell coordinates below 2^21: sorting by it keeps
+/// nearby cells close in memory.
+inline uint64_t mortonCode(uint64_t x, uint64_t y, uint64_t z) {
+  auto spread = [](uint64_t v) {  // the 21 low bits of v at every third position
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+  };
+  return spread(x) | spread(y) << 1 | spread(z) << 2;
+}
+
 class SpatialGrid {
  public:
   /// Builds the grid over points (kept by reference: they must outlive the grid) with cells of at
