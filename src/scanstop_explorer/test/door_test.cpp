@@ -10,6 +10,7 @@
 #include "scenes.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/floor_map.h"
+#include "scanstop_explorer/ground_truth.h"
 #include "scanstop_explorer/planner.h"
 
 using namespace scanstop::explorer;
@@ -246,4 +247,66 @@ TEST(OccludedFrontier, ACorridorSeenOnlyThroughADoorIsExplored) {
   ASSERT_TRUE(r3.success) << r3.message;
   const cv::Point t = r3.geometry.cellOf(r.target.x(), r.target.y());
   EXPECT_FALSE(r3.open.at<uint8_t>(t));
+}
+
+namespace {
+/// Adds an axis-aligned box [lo, hi] as 12 triangles.
+void addBox(scanstop::TriangleMesh& m, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  const int b = static_cast<int>(m.vertices.size());
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
+                        {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+  for (const auto& t : f) m.faces.emplace_back(b + t[0], b + t[1], b + t[2]);
+}
+}  // namespace
+
+TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCovered) {
+  // World: room x, y in [0, 4], corridor y in [-2.1, -0.1] behind a 0.1 m wall with a 0.9 m door
+  // x in [0.4, 1.3]; outer walls; a floor slab (below the obstacle layer: ignored).
+  scanstop::TriangleMesh world;
+  addBox(world, {-0.5f, -2.6f, -0.1f}, {4.5f, 4.5f, 0.0f});
+  addBox(world, {-0.1f, -2.2f, 0.0f}, {0.0f, 4.1f, 2.5f});   // west
+  addBox(world, {4.0f, -2.2f, 0.0f}, {4.1f, 4.1f, 2.5f});    // east
+  addBox(world, {-0.1f, 4.0f, 0.0f}, {4.1f, 4.1f, 2.5f});    // north
+  addBox(world, {-0.1f, -2.2f, 0.0f}, {4.1f, -2.1f, 2.5f});  // corridor south
+  addBox(world, {-0.1f, -0.1f, 0.0f}, {0.4f, 0.0f, 2.5f});   // room south, west of the door
+  addBox(world, {1.3f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});    // room south, east of the door
+  const Pose2D start(2.0, 2.0, 0.0);
+  // Explorer maps in the map frame (= the start pose): the room seen, the corridor not / also.
+  GridGeometry mg;
+  mg.resolution = 0.05;
+  mg.origin_x = -3.0;
+  mg.origin_y = -5.0;
+  mg.width = 140;
+  mg.height = 140;
+  cv::Mat room_only = cv::Mat::zeros(mg.height, mg.width, CV_8U), both;
+  for (int r = 0; r < mg.height; ++r)
+    for (int c = 0; c < mg.width; ++c) {
+      const Eigen::Vector2d w = mg.center({c, r}) + Eigen::Vector2d(2.0, 2.0);
+      if (w.x() > 0 && w.x() < 4 && w.y() > 0 && w.y() < 4) room_only.at<uint8_t>(r, c) = kFloor;
+    }
+  both = room_only.clone();
+  for (int r = 0; r < mg.height; ++r)
+    for (int c = 0; c < mg.width; ++c) {
+      const Eigen::Vector2d w = mg.center({c, r}) + Eigen::Vector2d(2.0, 2.0);
+      if (w.x() > 0 && w.x() < 4 && w.y() > -2.1 && w.y() < 0) both.at<uint8_t>(r, c) = kFloor;
+    }
+  const GroundTruthCoverage a = groundTruthCoverage(world, start, room_only, mg, start, 0.3);
+  const GroundTruthCoverage b = groundTruthCoverage(world, start, both, mg, start, 0.3);
+  // Reachable: the room (16 m2) and the corridor (8 m2) less what a 0.3 m disc cannot sweep.
+  EXPECT_GT(a.reachable_m2, 20.0);
+  EXPECT_LT(a.reachable_m2, 24.5);
+  EXPECT_NEAR(a.reachable_m2, b.reachable_m2, 1e-9);
+  EXPECT_LT(a.coverage, 0.75);  // the corridor is a third of the floor
+  EXPECT_GT(a.coverage, 0.6);
+  EXPECT_GT(b.coverage, 0.99);
+  // With a 0.5 m radius the 0.9 m door is too narrow: the corridor is not reachable floor.
+  const GroundTruthCoverage c = groundTruthCoverage(world, start, room_only, mg, start, 0.5);
+  EXPECT_LT(c.reachable_m2, 16.0);
+  EXPECT_GT(c.coverage, 0.99);
+  // Bad input is named.
+  EXPECT_THROW(groundTruthCoverage(scanstop::TriangleMesh(), start, room_only, mg, start, 0.3), std::invalid_argument);
+  EXPECT_THROW(groundTruthCoverage(world, Pose2D(0.2, -0.05, 0), room_only, mg, start, 0.3), std::invalid_argument);
+  EXPECT_THROW(groundTruthCoverage(world, start, cv::Mat::zeros(3, 3, CV_8U), mg, start, 0.3), std::invalid_argument);
 }

@@ -1,0 +1,37 @@
+#pragma once
+/// Ground-truth floor coverage in simulation: which share of the floor the robot could really
+/// reach (from the world mesh) did the explorer's floor map observe? The explorer's own `coverage`
+/// only counts cells it can reach in its own map: a door it wrongly thinks closed hides the rooms
+/// behind it and still gives 100 %.
+
+#include <opencv2/core.hpp>
+
+#include "scanstop_common/cloud.h"
+#include "scanstop_common/pose.h"
+#include "scanstop_explorer/grid.h"
+
+namespace scanstop {
+namespace explorer {
+
+struct GroundTruthCoverage {
+  double reachable_m2 = 0.0;  ///< true reachable floor (cells the robot disc can sweep from the start)
+  double observed_m2 = 0.0;   ///< of it, floor in the explorer's map (within tolerance)
+  double coverage = 0.0;      ///< observed / reachable
+  GridGeometry geometry;      ///< world frame grid of the masks
+  cv::Mat obstacle, reachable, observed;  ///< CV_8U 0/1
+};
+
+/// Rasterises the world mesh's triangles that reach into the obstacle layer (z in [z_lo, z_hi]) onto a
+/// world-frame grid (resolution [m]), erodes the free cells by robot_radius_m, takes the
+/// 4-connected component of the start position and grows it back by the radius: the true
+/// reachable floor. `states` (CellState, map frame, `map_geometry`) are the explorer's floor grid;
+/// T_world_map maps it into the world. A reachable cell is observed when a floor cell of the map
+/// lies within tolerance_m of it (SLAM drift). Throws std::invalid_argument naming a bad input
+/// (empty mesh, start inside an obstacle, bad sizes).
+GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D& start_world, const cv::Mat& states,
+                                        const GridGeometry& map_geometry, const Pose2D& T_world_map,
+                                        double robot_radius_m, double resolution = 0.05, double z_lo = 0.03,
+                                        double z_hi = 0.63, double tolerance_m = 0.1);
+
+}  // namespace explorer
+}  // namespace scanstop

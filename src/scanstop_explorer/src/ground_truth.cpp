@@ -1,0 +1,92 @@
+#include "scanstop_explorer/ground_truth.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "scanstop_explorer/floor_map.h"
+
+namespace scanstop {
+namespace explorer {
+
+GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D& start_world, const cv::Mat& states,
+                                        const GridGeometry& mg, const Pose2D& T_world_map, double robot_radius_m,
+                                        double resolution, double z_lo, double z_hi, double tolerance_m) {
+  if (world.faces.empty()) throw std::invalid_argument("groundTruthCoverage: the world mesh has no triangles");
+  if (!(resolution > 0.0) || !(robot_radius_m > 0.0) || !(z_hi > z_lo) || !(tolerance_m >= 0.0))
+    throw std::invalid_argument("groundTruthCoverage: resolution, robot radius and tolerance must be positive, z_hi > z_lo");
+  if (states.type() != CV_8U || states.cols != mg.width || states.rows != mg.height)
+    throw std::invalid_argument("groundTruthCoverage: states must be CV_8U of the map geometry's size");
+  GroundTruthCoverage out;
+  Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
+  for (const Eigen::Vector3f& v : world.vertices) {
+    lo = lo.cwiseMin(v.head<2>().cast<double>());
+    hi = hi.cwiseMax(v.head<2>().cast<double>());
+  }
+  GridGeometry& g = out.geometry;
+  g.resolution = resolution;
+  g.origin_x = std::floor(lo.x() / resolution) * resolution - resolution;
+  g.origin_y = std::floor(lo.y() / resolution) * resolution - resolution;
+  g.width = static_cast<int>(std::ceil((hi.x() - g.origin_x) / resolution)) + 2;
+  g.height = static_cast<int>(std::ceil((hi.y() - g.origin_y) / resolution)) + 2;
+  if (static_cast<double>(g.width) * g.height > 1e8)
+    throw std::invalid_argument("groundTruthCoverage: the world is too large for a " + std::to_string(resolution) + " m grid");
+  out.obstacle = cv::Mat::zeros(g.height, g.width, CV_8U);
+  auto px = [&](const Eigen::Vector3f& v) {
+    return cv::Point(static_cast<int>(std::floor((v.x() - g.origin_x) / resolution)),
+                     static_cast<int>(std::floor((v.y() - g.origin_y) / resolution)));
+  };
+  for (const Eigen::Vector3i& f : world.faces) {
+    const Eigen::Vector3f& a = world.vertices.at(f[0]);
+    const Eigen::Vector3f& b = world.vertices.at(f[1]);
+    const Eigen::Vector3f& c = world.vertices.at(f[2]);
+    const float zmin = std::min({a.z(), b.z(), c.z()}), zmax = std::max({a.z(), b.z(), c.z()});
+    if (zmax < z_lo || zmin > z_hi) continue;  // floor, ceiling, table tops above the layer
+    const cv::Point pts[3] = {px(a), px(b), px(c)};
+    cv::fillConvexPoly(out.obstacle, pts, 3, cv::Scalar(1));
+    cv::polylines(out.obstacle, std::vector<cv::Point>(pts, pts + 3), true, cv::Scalar(1));  // vertical faces
+  }
+  const cv::Point s = g.cellOf(start_world.x, start_world.y);
+  if (!g.contains(s) || out.obstacle.at<uint8_t>(s))
+    throw std::invalid_argument("groundTruthCoverage: the start (" + std::to_string(start_world.x) + ", " +
+                                std::to_string(start_world.y) + ") is outside the world or inside an obstacle");
+  // Free cells whose distance to an obstacle is at least the radius, component of the start.
+  cv::Mat dist;
+  cv::distanceTransform(1 - out.obstacle, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::Mat centres = dist >= static_cast<float>(robot_radius_m / resolution);
+  if (!centres.at<uint8_t>(s)) throw std::invalid_argument("groundTruthCoverage: the robot disc does not fit at the start");
+  cv::Mat mask = cv::Mat::zeros(g.height + 2, g.width + 2, CV_8U);
+  cv::floodFill(centres, mask, s, cv::Scalar(255), nullptr, cv::Scalar(), cv::Scalar(), 4 | cv::FLOODFILL_MASK_ONLY | (1 << 8));
+  cv::Mat comp = mask(cv::Rect(1, 1, g.width, g.height)).clone();
+  // Swept floor: the component grown by the robot radius, obstacles excluded.
+  const int r = static_cast<int>(std::ceil(robot_radius_m / resolution));
+  cv::Mat swept;
+  cv::dilate(comp, swept, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1)));
+  out.reachable = (swept != 0) & (out.obstacle == 0);
+  out.reachable /= 255;
+  // Map floor in the world grid, grown by the tolerance.
+  cv::Mat map_floor = cv::Mat::zeros(g.height, g.width, CV_8U);
+  for (int row = 0; row < mg.height; ++row)
+    for (int col = 0; col < mg.width; ++col) {
+      if (states.at<uint8_t>(row, col) != kFloor) continue;
+      const Eigen::Vector2d m = mg.center({col, row});
+      const Pose2D w = T_world_map * Pose2D(m.x(), m.y(), 0.0);
+      const cv::Point c = g.cellOf(w.x, w.y);
+      if (g.contains(c)) map_floor.at<uint8_t>(c) = 1;
+    }
+  const int t = static_cast<int>(std::ceil(tolerance_m / resolution));
+  if (t > 0) cv::dilate(map_floor, map_floor, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * t + 1, 2 * t + 1)));
+  out.observed = out.reachable & map_floor;
+  const int n_reach = cv::countNonZero(out.reachable), n_obs = cv::countNonZero(out.observed);
+  out.reachable_m2 = n_reach * g.cellArea();
+  out.observed_m2 = n_obs * g.cellArea();
+  out.coverage = n_reach > 0 ? static_cast<double>(n_obs) / n_reach : 0.0;
+  return out;
+}
+
+}  // namespace explorer
+}  // namespace scanstop
