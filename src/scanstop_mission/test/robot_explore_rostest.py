@@ -34,9 +34,11 @@ class RobotExploreOnEmulators(unittest.TestCase):
         msg = last.get("msg")
         self.assertIsNotNone(msg, "no mission/status message")
         self.assertEqual(msg.state, "DONE", "mission ended %s: %s" % (msg.state, msg.last_error))
-        deadline = time.time() + 20
+        # The mission writes summary.json, then the plots and report.md (seconds on a loaded machine).
+        deadline = time.time() + 60
         summary_path = os.path.join(run_dir, "summary.json")
-        while not os.path.exists(summary_path) and time.time() < deadline:
+        report_path = os.path.join(run_dir, "report.md")
+        while not (os.path.exists(summary_path) and os.path.exists(report_path)) and time.time() < deadline:
             time.sleep(0.2)
         with open(summary_path) as f:
             summary = json.load(f)
@@ -49,7 +51,7 @@ class RobotExploreOnEmulators(unittest.TestCase):
         # The robot moved between the scans: odometry from pioneer_driver saw the motion.
         moved = max(abs(float(r["odom_x"])) + abs(float(r["odom_y"])) for r in rows)
         self.assertGreater(moved, 0.2, rows)
-        self.assertTrue(os.path.exists(os.path.join(run_dir, "report.md")))
+        self.assertTrue(os.path.exists(report_path), "no report.md 60 s after the summary")
 
 
 if __name__ == "__main__":
