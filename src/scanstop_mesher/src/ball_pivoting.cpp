@@ -611,16 +611,13 @@ void BallPivoting::runRegions(const std::vector<double>& radii_m, int regions) {
 
   // One front: the workers' edges, loops and faces appended (their vertices are disjoint).
   const auto t1 = std::chrono::steady_clock::now();
-  std::vector<int> edge_offset(regions, 0);
   stats_.triangles_per_radius.assign(radii_m.size(), 0);
   stats_.seconds_per_radius.assign(radii_m.size(), 0.0);
+  edges_.clear();
   for (int k = 0; k < regions; ++k) {
-    edge_offset[k] = static_cast<int>(edges_.size());
     merge(*workers[k]);
     workers[k].reset();
   }
-  for (size_t i = 0; i < n; ++i)
-    if (region_[i] != 255 && out_head_[i] >= 0) out_head_[i] += edge_offset[region_[i]];
   allocDirEdges(stats_.points);
   for (const auto& f : faces_) {
     insertDirEdge(edgeKey(f[0], f[1]));
@@ -652,14 +649,25 @@ void BallPivoting::runRegions(const std::vector<double>& radii_m, int regions) {
 }
 
 void BallPivoting::merge(BallPivoting& child) {
-  const int e0 = static_cast<int>(edges_.size()), l0 = static_cast<int>(loop_size_.size());
-  for (Edge E : child.edges_) {
-    if (E.next >= 0) E.next += e0;
-    if (E.prev >= 0) E.prev += e0;
-    if (E.next_out >= 0) E.next_out += e0;
+  // Only the edges still on the front are taken over (most edges were removed on the way): new ids,
+  // links and the per-vertex lists of the child's vertices renumbered.
+  const int l0 = static_cast<int>(loop_size_.size());
+  std::vector<int> id(child.edges_.size(), -1);
+  int next_id = static_cast<int>(edges_.size());
+  for (size_t e = 0; e < child.edges_.size(); ++e)
+    if (child.edges_[e].state != kRemoved) id[e] = next_id++;
+  auto map = [&id](int e) { return e >= 0 ? id[e] : -1; };
+  for (size_t e = 0; e < child.edges_.size(); ++e) {
+    Edge E = child.edges_[e];
+    if (E.state == kRemoved) continue;
+    E.next = map(E.next);
+    E.prev = map(E.prev);
+    E.next_out = map(E.next_out);
     E.loop += l0;
     edges_.push_back(E);
   }
+  for (size_t v = 0; v < num_points_; ++v)
+    if (region_[v] == child.region_id_) out_head_[v] = map(out_head_[v]);
   loop_size_.insert(loop_size_.end(), child.loop_size_.begin(), child.loop_size_.end());
   faces_.insert(faces_.end(), child.faces_.begin(), child.faces_.end());
   pinched_.insert(pinched_.end(), child.pinched_.begin(), child.pinched_.end());
