@@ -23,6 +23,18 @@ timeout 600 roslaunch -p "$port" --skip-log-check "$root/launch/sim_explore.laun
 if [[ ! -f "$run/summary.json" || ! -s "$run/map/poses.csv" ]]; then
   echo "check_mission_replay: the mission left no summary or map (see $work/explore.log)"; tail -30 "$work/explore.log"; exit 1
 fi
+# In simulation the summary holds the ground-truth coverage (the map against the world's truly
+# reachable floor), next to the explorer's own figure.
+if ! /usr/bin/python3 - "$run/summary.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+tc, area = s.get("true_coverage"), s.get("true_reachable_floor_m2")
+print("check_mission_replay: coverage %s (explorer's map), true coverage %s of %s m2" % (s["coverage"], tc, area))
+sys.exit(0 if isinstance(tc, float) and 0.2 < tc <= 1.0 and 90.0 < area < 100.0 else 1)
+PY
+then
+  echo "check_mission_replay: summary.json has no plausible true_coverage (room_10x8: 96 m2 of reachable floor)"; exit 1
+fi
 # rosbag record closes the bag on SIGINT; the launch ends when the mission does.
 for _ in $(seq 30); do [[ -f "$run/mission.bag" ]] && break; sleep 1; done
 [[ -f "$run/mission.bag" ]] || { echo "check_mission_replay: no $run/mission.bag"; ls -la "$run"; exit 1; }

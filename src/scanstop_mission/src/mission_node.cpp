@@ -4,10 +4,15 @@
 #include <scanstop_msgs/MissionStatus.h>
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <sstream>
 
 #include "scanstop_common/error.h"
+#include "scanstop_common/map_dir.h"
+#include "scanstop_common/stl_io.h"
+#include "scanstop_explorer/explorer.h"
+#include "scanstop_explorer/ground_truth.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_mission/report.h"
@@ -49,6 +54,17 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "mesh_output", config_.mesh_output);
   std::string map_dir = config_.run_dir + "/map";
   ros_params::optional(pnh, "map_dir", map_dir);
+  map_dir_ = map_dir;
+  ros_params::optional(pnh, "world_file", world_file_);
+  ros_params::optional(pnh, "world_frame", world_frame_);
+  ros_params::optional(pnh, "map_frame", map_frame_);
+  ros_params::optional(pnh, "robot_radius", robot_radius_m_);
+  if (!(robot_radius_m_ > 0.0 && robot_radius_m_ <= 5.0))
+    throw ConfigError("parameter '" + pnh.resolveName("robot_radius") + "' = " + std::to_string(robot_radius_m_) +
+                      " m must be in (0, 5] m");
+  if (!world_file_.empty() && (world_frame_.empty() || map_frame_.empty() || world_frame_ == map_frame_))
+    throw ConfigError("parameters '" + pnh.resolveName("world_frame") + "' and '" + pnh.resolveName("map_frame") +
+                      "' must be two different, non-empty frame ids");
   CallTimeouts timeouts;
   ros_params::optional(pnh, "wait_for_service_timeout", timeouts.wait_for_service_s);
   ros_params::optional(pnh, "scan_timeout", timeouts.scan_s);
@@ -74,14 +90,15 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
       pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
             "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
-            "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output"});
+            "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
+            "robot_radius"});
   if (!unknown.empty()) {
     std::string names;
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
     throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
                       "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
-                      "autostart, shutdown_when_done");
+                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius");
   }
   try {
     config_.validate();
@@ -99,6 +116,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
              mission_->snapshot().scans.size());
 
   status_pub_ = nh_.advertise<scanstop_msgs::MissionStatus>("mission/status", 10, true);
+  // tf2's static transforms are on the global /tf_static (latched), as every tf2 listener reads them.
+  if (!world_file_.empty()) static_tf_sub_ = nh_.subscribe("/tf_static", 10, &MissionNode::onStaticTf, this);
   mission_->setStateListener([this] {
     ros::WallTimerEvent none;
     publishStatus(none);
@@ -121,15 +140,54 @@ MissionNode::~MissionNode() {
   if (runner_.joinable()) runner_.join();
 }
 
+void MissionNode::onStaticTf(const tf2_msgs::TFMessage::ConstPtr& msg) {
+  for (const auto& t : msg->transforms)
+    if (t.header.frame_id == world_frame_ && t.child_frame_id == map_frame_) {
+      const auto& q = t.transform.rotation;
+      const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+      std::lock_guard<std::mutex> lock(start_mutex_);
+      world_T_map_ = Pose2D(t.transform.translation.x, t.transform.translation.y, yaw);
+    }
+}
+
+std::optional<TrueCoverage> MissionNode::trueCoverage() {
+  if (world_file_.empty()) return std::nullopt;
+  std::optional<Pose2D> start;
+  {
+    std::lock_guard<std::mutex> lock(start_mutex_);
+    start = world_T_map_;
+  }
+  if (!start) {
+    ROS_WARN("mission: no %s -> %s transform on /tf_static (sim_node publishes it): no true coverage",
+             world_frame_.c_str(), map_frame_.c_str());
+    return std::nullopt;
+  }
+  try {
+    const TriangleMesh world = readStl(world_file_);
+    const MapDirectory dir(map_dir_);
+    explorer::Explorer ex;  // the explorer's default floor map, as the floor_coverage tool builds it
+    std::vector<std::string> problems;
+    ex.loadMapDirectory(dir, &problems);
+    const explorer::GroundTruthCoverage c = explorer::groundTruthCoverage(
+        world, *start, ex.floorMap().states(), ex.floorMap().geometry(), *start, robot_radius_m_);
+    return TrueCoverage{c.coverage, c.reachable_m2};
+  } catch (const std::exception& e) {
+    ROS_WARN("mission: no true coverage (%s: %s)", world_file_.c_str(), e.what());
+    return std::nullopt;
+  }
+}
+
 void MissionNode::runMission() {
   const State end = mission_->run();
   const MissionState state = mission_->snapshot();
   try {
-    const std::string report = writeReport(state, config_.run_dir, listImages(config_.run_dir, "explorer"));
+    const std::optional<TrueCoverage> truth = trueCoverage();
+    const std::string report = writeReport(state, config_.run_dir, listImages(config_.run_dir, "explorer"), truth);
     const Summary s = summarize(state);
     std::ostringstream out;
     out << std::fixed << std::setprecision(1) << "mission " << toString(end) << ": " << s.scans << " scans, coverage "
         << s.coverage * 100.0 << " %, " << s.collisions << " collisions, " << s.elapsed_s << " s";
+    if (truth) out << " (" << truth->coverage * 100.0 << " % of the truly reachable floor)";
     if (s.has_ground_truth)
       out << std::setprecision(1) << ", final pose error " << s.slam_error_m * 100.0 << " cm (odometry alone "
           << s.odom_error_m * 100.0 << " cm)";

@@ -126,6 +126,8 @@ std::string toJson(const Summary& s) {
       << "  \"state\": " << quote(s.state) << ",\n"
       << "  \"scans\": " << s.scans << ",\n"
       << "  \"coverage\": " << num(s.coverage) << ",\n"
+      << "  \"true_coverage\": " << (s.has_true_coverage ? num(s.true_coverage) : "null") << ",\n"
+      << "  \"true_reachable_floor_m2\": " << (s.has_true_coverage ? num(s.true_reachable_m2, 2) : "null") << ",\n"
       << "  \"collisions\": " << s.collisions << ",\n"
       << "  \"complete\": " << (s.complete ? "true" : "false") << ",\n"
       << "  \"complete_reason\": " << quote(s.complete_reason) << ",\n"
@@ -144,8 +146,14 @@ std::string toJson(const Summary& s) {
   return out.str();
 }
 
-std::string writeReport(const MissionState& st, const std::string& run_dir, const std::vector<std::string>& images) {
-  const Summary s = summarize(st);
+std::string writeReport(const MissionState& st, const std::string& run_dir, const std::vector<std::string>& images,
+                        const std::optional<TrueCoverage>& truth) {
+  Summary s = summarize(st);
+  if (truth) {
+    s.has_true_coverage = true;
+    s.true_coverage = truth->coverage;
+    s.true_reachable_m2 = truth->reachable_m2;
+  }
   writeFileAtomic(run_dir + "/summary.json", toJson(s));
 
   // Coverage against scan count.
@@ -205,8 +213,11 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
      << "| final state | " << s.state << " |\n"
      << "| exploration complete | " << (s.complete ? "yes" : "no") << " (" << s.complete_reason << ") |\n"
      << "| scans | " << s.scans << " |\n"
-     << "| coverage of the reachable floor | " << num(s.coverage * 100.0, 1) << " % |\n"
-     << "| collisions | " << s.collisions << " |\n"
+     << "| coverage of the reachable floor (explorer's map) | " << num(s.coverage * 100.0, 1) << " % |\n";
+  if (s.has_true_coverage)
+    md << "| coverage of the truly reachable floor (" << num(s.true_reachable_m2, 1) << " m2, from the world) | "
+       << num(s.true_coverage * 100.0, 1) << " % |\n";
+  md << "| collisions | " << s.collisions << " |\n"
      << "| registrations that did not converge | " << s.unconverged_registrations << " |\n";
   if (s.has_ground_truth) {
     md << "| final SLAM pose error | " << num(s.slam_error_m * 100.0, 1) << " cm, " << num(s.slam_error_yaw_deg, 2)

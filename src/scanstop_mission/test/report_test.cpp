@@ -72,6 +72,17 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   const std::string text = readFile(md);
   EXPECT_NE(text.find("| scans | 2 |"), std::string::npos) << text;
   EXPECT_NE(text.find("step_001_evaluation.png"), std::string::npos);
+  // Without a world (the real robot, or no world_file) there is no true coverage.
+  EXPECT_NE(json.find("\"true_coverage\": null"), std::string::npos) << json;
+  EXPECT_EQ(text.find("truly reachable"), std::string::npos) << text;
+  // In simulation the ground-truth coverage is reported next to the explorer's own figure.
+  writeReport(twoScans(), dir, {}, TrueCoverage{0.816, 96.0});
+  const std::string sim_json = readFile(dir + "/summary.json");
+  EXPECT_NE(sim_json.find("\"true_coverage\": 0.8160"), std::string::npos) << sim_json;
+  EXPECT_NE(sim_json.find("\"true_reachable_floor_m2\": 96.00"), std::string::npos) << sim_json;
+  EXPECT_NE(readFile(dir + "/report.md").find("| coverage of the truly reachable floor (96.0 m2, from the world) | 81.6 % |"),
+            std::string::npos)
+      << readFile(dir + "/report.md");
   EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
 

@@ -5,12 +5,18 @@
 
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <atomic>
 #include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
 
+#include "scanstop_common/pose.h"
 #include "scanstop_mission/mission.h"
+#include "scanstop_mission/report.h"
 #include "scanstop_mission/ros_robot_system.h"
 
 namespace scanstop {
@@ -29,6 +35,9 @@ class MissionNode {
   bool onAbort(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   void publishStatus(const ros::WallTimerEvent&);
   void runMission();
+  void onStaticTf(const tf2_msgs::TFMessage::ConstPtr& msg);
+  /// The ground-truth coverage of the final map when world_file is set (simulation), else none.
+  std::optional<TrueCoverage> trueCoverage();
 
   ros::NodeHandle nh_;
   MissionConfig config_;
@@ -40,6 +49,13 @@ class MissionNode {
   ros::ServiceServer start_srv_, pause_srv_, resume_srv_, abort_srv_;
   ros::Publisher status_pub_;
   ros::WallTimer status_timer_;
+  std::string map_dir_;
+  // Ground-truth coverage in simulation: the world mesh, and sim_node's static world -> map (the start).
+  std::string world_file_, world_frame_ = "world", map_frame_ = "map";
+  double robot_radius_m_ = 0.3;
+  ros::Subscriber static_tf_sub_;
+  std::mutex start_mutex_;
+  std::optional<Pose2D> world_T_map_;
 };
 
 }  // namespace mission

@@ -1,6 +1,7 @@
 #pragma once
 /// The run report: summary.json for scripts, PNG plots and a one-page report.md for people.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,18 @@ struct Summary {
   double elapsed_s = 0.0;              ///< wall time of the mission [s]
   double modelled_time_s = 0.0;        ///< time the steps would take on the robot [s]
   int unconverged_registrations = 0;
+  /// In simulation: the share of the world's truly reachable floor (from the world mesh) that the
+  /// map observed. `coverage` is the explorer's own figure, counted on the floor it can reach in its
+  /// map: a door it never passed hides what lies behind it there, not here.
+  bool has_true_coverage = false;
+  double true_coverage = 0.0;          ///< [0..1]
+  double true_reachable_m2 = 0.0;      ///< the truly reachable floor [m^2]
+};
+
+/// Ground-truth coverage of a simulated run (explorer::groundTruthCoverage on the final map).
+struct TrueCoverage {
+  double coverage = 0.0;      ///< observed / reachable [0..1]
+  double reachable_m2 = 0.0;  ///< [m^2]
 };
 
 /// Computes the summary of a mission state.
@@ -40,7 +53,9 @@ std::string toJson(const Summary& s);
 /// Writes summary.json, coverage.png, trajectory.png and report.md into run_dir (atomically).
 /// `images` lists further images (relative to run_dir, e.g. the explorer's per-step figures) that the
 /// report links. Returns the path of report.md. Throws IoError.
-std::string writeReport(const MissionState& state, const std::string& run_dir, const std::vector<std::string>& images);
+/// `truth`: the ground-truth coverage when the run was simulated (summary.json and the report show it).
+std::string writeReport(const MissionState& state, const std::string& run_dir, const std::vector<std::string>& images,
+                        const std::optional<TrueCoverage>& truth = std::nullopt);
 
 }  // namespace mission
 }  // namespace scanstop
