@@ -1,6 +1,7 @@
 #include "scanstop_mission/mission_node.h"
 
 #include <dirent.h>
+#include <malloc.h>
 #include <scanstop_msgs/MissionStatus.h>
 
 #include <algorithm>
@@ -197,6 +198,7 @@ void MissionNode::runMission() {
   } catch (const std::exception& e) {
     ROS_ERROR("mission: could not write the report: %s", e.what());
   }
+  malloc_trim(0);  // the report's images and the coverage grids are freed: give the heap back
   ros::WallTimerEvent none;
   publishStatus(none);
   running_ = false;
