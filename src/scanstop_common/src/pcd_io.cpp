@@ -67,10 +67,17 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
     ++line_no;
     offset += line.size() + 1;
     if (offset > (1u << 20)) fail("header longer than 1 MiB");
+    const bool empty = line.empty();
     if (!line.empty() && line.back() == '\r') line.pop_back();
     std::istringstream words(line);
     std::string key;
-    if (!(words >> key) || key[0] == '#') continue;
+    if (!(words >> key)) {
+      // PCL 1.13 skips an empty line but ends its header at a blank one ("\r\n" included) and then
+      // crashed on the rest (pcd_fuzzer: SEGV in PCDReader::read): refuse what PCL would misread.
+      if (empty) continue;
+      fail("line " + std::to_string(line_no) + " is blank but not empty (PCL would end the header there)");
+    }
+    if (key[0] == '#') continue;
     if (key == "COLUMNS") key = "FIELDS";
     int k = 0;
     while (k < 10 && key != kOrder[k]) ++k;
@@ -139,6 +146,38 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
     fail("WIDTH x HEIGHT = " + std::to_string(h.width) + " x " + std::to_string(h.height) + " but POINTS " + std::to_string(h.points));
   for (size_t i = 0; i < h.fields.size(); ++i) h.point_step += h.sizes[i] * h.counts[i];
   h.data_offset = offset;
+  // PCL 1.13 reads on after the DATA line: an empty line or a comment is skipped, a line whose first
+  // word starts like a header entry is read as one (a second DATA moves the data, a WIDTH changes the
+  // size) and anything else ends its header. Binary data that begins like that made PCL request a
+  // ~100 TB allocation (pcd_fuzzer, cloud_io_test PcdFuzzFindings): refuse what PCL would misread.
+  for (int skipped = 0; skipped < 1000; ++skipped) {
+    std::string next;
+    char c = 0;
+    while (next.size() < 256 && in.get(c) && c != '\n') next.push_back(c);
+    if (next.size() == 256) in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+    const bool at_end = !in;
+    if (next.empty()) {
+      if (at_end) break;
+      continue;
+    }
+    std::istringstream words(next);
+    std::string first;
+    if (!(words >> first)) break;
+    if (first[0] == '#') {
+      if (at_end) break;
+      continue;
+    }
+    for (const char* entry : kOrder)
+      if (first.compare(0, std::strlen(entry), entry) == 0 || first.compare(0, 7, "COLUMNS") == 0) {
+        std::string shown = first.substr(0, 20);
+        for (char& ch : shown)
+          if (static_cast<unsigned char>(ch) < 0x20 || static_cast<unsigned char>(ch) > 0x7e) ch = '?';
+        fail("the data begins with '" + shown + "', which PCL would read as a header line");
+      }
+    break;
+  }
+  in.clear();
+  in.seekg(static_cast<std::streamoff>(offset));
   const uint64_t body = size > offset ? size - offset : 0;
   if (h.data == "binary") {
     const uint64_t need = h.points * h.point_step;  // < 2^32 * 2^35: no overflow

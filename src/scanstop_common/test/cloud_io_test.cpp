@@ -177,7 +177,31 @@ TEST(CloudIo, PcdFuzzFindings) {
           "VIEWPOINT 1 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n# .PVERSI" + std::string(19, '\xff') + "t\x02VER" +
           bytes({0xad, 0xb6, 0xb3, 0xb8}) + " 0.7\nFIELDS" + bytes({1, 0, 0}) +
           "\nIO RSI .7CD v0.Xv- Poi 2\nVIEWPOINT 0 0 0 1");
-  expectIoError([&] { readPcd(garbage); }, garbage, "line 11: '#' is not a number");
+  // (Refused before its data lines are read: PCL would take the line after the comment for a FIELDS line.)
+  expectIoError([&] { readPcd(garbage); }, garbage, "which PCL would read as a header line");
+  // 4. PCL 1.13 reads header lines after DATA too: binary data starting "DATA" was taken for a second
+  //    DATA line (the data moved) and PCDReader::read requested a ~100 TB allocation (ASan
+  //    allocation-size-too-big, pcd_fuzzer in CI). Data that PCL would read as a header line is refused.
+  const std::string second_data = dir.write(
+      "second_data.pcd",
+      std::string("# .PCD v0.7TY - Point Cloud Data file foVERt\nVERSION 0.7\nFIELDS .x y zr ange\nSIZE 4 4 4 4\n"
+                  "TYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 2\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA binary\n") +
+          bytes({0x44, 0x41, 0x54, 0x41, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+                                   0x00, 0x00, 0x45, 0x52, 0x53, 0x49, 0x4f, 0x4e, 0x20, 0x43, 0x31, 0x0a, 0x43, 0x4f, 0x4c, 0x55,
+                                   0x4d, 0x4e, 0x53, 0x80, 0x3f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00,
+                                   0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0xc0,
+                                   0x7f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x35, 0x00,
+                                   0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x40, 0x00, 0x00, 0x00, 0x40}));
+  expectIoError([&] { readPcd(second_data); }, second_data, "the data begins with 'DATA");
+  // Binary data that merely starts with a comment character or a newline is data (PCL skips such
+  // lines and keeps the data where the DATA line put it).
+  PointCloud hash_first;
+  hash_first.points = {{1.0f, 0.0f, 0.0f}};
+  hash_first.setUnorganized();
+  std::memcpy(&hash_first.points[0].x(), "#\n\x00\x3f", 4);
+  const std::string hash_file = dir.file("hash_first.pcd");
+  writePcd(hash_file, hash_first);
+  EXPECT_EQ(readPcd(hash_file).points.at(0).x(), hash_first.points[0].x());
   const std::string short_ascii = dir.write("short.pcd", std::string(kAsciiHead) + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1.000 2.000 3.000\n\n");
   expectIoError([&] { readPcd(short_ascii); }, short_ascii, "truncated PCD: 1 of 2 points");
   const std::string wide = dir.write("wide.pcd", std::string(kAsciiHead) + "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 4\n");
