@@ -14,7 +14,6 @@
 
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
-#include "scanstop_explorer/explorer.h"
 #include "scanstop_explorer/ground_truth.h"
 
 namespace {
@@ -61,16 +60,12 @@ int main(int argc, char** argv) {
     struct stat st;
     if (::stat(pos[1].c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
       throw std::invalid_argument("map directory " + pos[1] + " does not exist");
-    MapDirectory dir(pos[1]);
-    if (dir.size() == 0) throw std::invalid_argument("map directory " + pos[1] + " holds no scans");
-    explorer::Explorer ex;
+    const MapDirectory dir(pos[1]);
     std::vector<std::string> problems;
-    ex.loadMapDirectory(dir, &problems);
+    const explorer::GroundTruthCoverage c = explorer::groundTruthCoverageOfMap(world, start, dir, radius, tolerance, &problems);
     for (const std::string& p : problems) std::cerr << "floor_coverage: " << p << "\n";
-    const explorer::GroundTruthCoverage c = explorer::groundTruthCoverage(
-        world, start, ex.floorMap().states(), ex.floorMap().geometry(), start, radius, 0.05, 0.03, 0.63, tolerance);
     std::printf("{\"reachable_m2\": %.2f, \"observed_m2\": %.2f, \"coverage\": %.4f, \"scans\": %zu}\n", c.reachable_m2,
-                c.observed_m2, c.coverage, ex.scanCount());
+                c.observed_m2, c.coverage, c.scans);
   } catch (const std::exception& e) {
     std::cerr << "floor_coverage: " << e.what() << "\n";
     return 2;

@@ -8,6 +8,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "scanstop_explorer/explorer.h"
 #include "scanstop_explorer/floor_map.h"
 
 namespace scanstop {
@@ -86,6 +87,18 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
   out.observed_m2 = n_obs * g.cellArea();
   out.coverage = n_reach > 0 ? static_cast<double>(n_obs) / n_reach : 0.0;
   return out;
+}
+
+GroundTruthCoverage groundTruthCoverageOfMap(const TriangleMesh& world, const Pose2D& start_world,
+                                             const MapDirectory& map, double robot_radius_m, double tolerance_m,
+                                             std::vector<std::string>* problems) {
+  if (map.size() == 0) throw std::invalid_argument("map directory " + map.dir() + " holds no scans");
+  Explorer ex;
+  ex.loadMapDirectory(map, problems);
+  GroundTruthCoverage c = groundTruthCoverage(world, start_world, ex.floorMap().states(), ex.floorMap().geometry(),
+                                              start_world, robot_radius_m, 0.05, 0.03, 0.63, tolerance_m);
+  c.scans = ex.scanCount();
+  return c;
 }
 
 }  // namespace explorer

@@ -4,7 +4,9 @@
 // seen only through a door keeps exploration going although a nearby scan's knowledge disc covers it.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "scenes.h"
@@ -309,4 +311,9 @@ TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCove
   EXPECT_THROW(groundTruthCoverage(scanstop::TriangleMesh(), start, room_only, mg, start, 0.3), std::invalid_argument);
   EXPECT_THROW(groundTruthCoverage(world, Pose2D(0.2, -0.05, 0), room_only, mg, start, 0.3), std::invalid_argument);
   EXPECT_THROW(groundTruthCoverage(world, start, cv::Mat::zeros(3, 3, CV_8U), mg, start, 0.3), std::invalid_argument);
+  // A map directory without scans (mission_node and floor_coverage read maps through this).
+  char pattern[] = "/tmp/ground_truth_test_XXXXXX";
+  ASSERT_NE(mkdtemp(pattern), nullptr);
+  EXPECT_THROW(groundTruthCoverageOfMap(world, start, scanstop::MapDirectory(pattern), 0.3), std::invalid_argument);
+  EXPECT_EQ(std::system((std::string("rm -rf ") + pattern).c_str()), 0);
 }

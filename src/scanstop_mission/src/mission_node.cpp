@@ -12,7 +12,6 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
-#include "scanstop_explorer/explorer.h"
 #include "scanstop_explorer/ground_truth.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
@@ -165,12 +164,8 @@ std::optional<TrueCoverage> MissionNode::trueCoverage() {
   }
   try {
     const TriangleMesh world = readStl(world_file_);
-    const MapDirectory dir(map_dir_);
-    explorer::Explorer ex;  // the explorer's default floor map, as the floor_coverage tool builds it
-    std::vector<std::string> problems;
-    ex.loadMapDirectory(dir, &problems);
-    const explorer::GroundTruthCoverage c = explorer::groundTruthCoverage(
-        world, *start, ex.floorMap().states(), ex.floorMap().geometry(), *start, robot_radius_m_);
+    const explorer::GroundTruthCoverage c =
+        explorer::groundTruthCoverageOfMap(world, *start, MapDirectory(map_dir_), robot_radius_m_);
     return TrueCoverage{c.coverage, c.reachable_m2};
   } catch (const std::exception& e) {
     ROS_WARN("mission: no true coverage (%s: %s)", world_file_.c_str(), e.what());

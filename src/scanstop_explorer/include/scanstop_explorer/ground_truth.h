@@ -6,7 +6,11 @@
 
 #include <opencv2/core.hpp>
 
+#include <string>
+#include <vector>
+
 #include "scanstop_common/cloud.h"
+#include "scanstop_common/map_dir.h"
 #include "scanstop_common/pose.h"
 #include "scanstop_explorer/grid.h"
 
@@ -17,6 +21,7 @@ struct GroundTruthCoverage {
   double reachable_m2 = 0.0;  ///< true reachable floor (cells the robot disc can sweep from the start)
   double observed_m2 = 0.0;   ///< of it, floor in the explorer's map (within tolerance)
   double coverage = 0.0;      ///< observed / reachable
+  size_t scans = 0;           ///< scans of the map (groundTruthCoverageOfMap; 0 otherwise)
   GridGeometry geometry;      ///< world frame grid of the masks
   cv::Mat obstacle, reachable, observed;  ///< CV_8U 0/1
 };
@@ -32,6 +37,13 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
                                         const GridGeometry& map_geometry, const Pose2D& T_world_map,
                                         double robot_radius_m, double resolution = 0.05, double z_lo = 0.03,
                                         double z_hi = 0.63, double tolerance_m = 0.1);
+
+/// The same for a map directory: builds the explorer's floor map (default configuration) from its
+/// scans, whose map frame is start_world in the world (as sim_node's), and compares. `problems`
+/// receives the map directory's skipped files. Throws std::invalid_argument for an empty map.
+GroundTruthCoverage groundTruthCoverageOfMap(const TriangleMesh& world, const Pose2D& start_world,
+                                             const MapDirectory& map, double robot_radius_m, double tolerance_m = 0.1,
+                                             std::vector<std::string>* problems = nullptr);
 
 }  // namespace explorer
 }  // namespace scanstop
