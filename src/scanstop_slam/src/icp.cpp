@@ -243,6 +243,51 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   std::vector<Eigen::Vector3f> matched(source.size());
   std::vector<uint8_t> has(source.size(), 0);
   const double c_max = config.c_max_m;
+  // Exact shortcuts of the correspondence search, from what the last search of each point found.
+  // A hit (its nearest map point m within c_max): m is a map point, so the nearest one now is no
+  // farther than |q - m|, and that radius (padded against rounding) replaces c_max. A miss is
+  // searched out to c_max + miss_margin; the distance of the nearest point found beyond c_max
+  // (or that radius when there is none) is a lower bound at the searched position (anchor), and
+  // while the point has moved less than that bound minus c_max from there it still has no match
+  // within c_max and is not searched at all. Either way the result is the nearest map point within
+  // c_max, as the full search finds it (poses identical up to exact distance ties).
+  const bool reuse = config.reuse_search_bounds;
+  const float c_max_f = static_cast<float>(c_max);
+  const float c_max2_f = static_cast<float>(c_max * c_max);  // nearest()'s own bound for radius c_max
+  const double miss_margin = 0.5 * c_max;
+  std::vector<uint8_t> hit(source.size(), 0);     // last search: a map point within c_max (matched[i])
+  std::vector<uint8_t> bounded(source.size(), 0); // last search: a miss with a lower bound
+  std::vector<Eigen::Vector3f> anchor(reuse ? source.size() : 0);
+  std::vector<float> lower(reuse ? source.size() : 0);  // nearest map point distance at anchor >= this [m]
+  // The nearest map point within c_max of q (point i transformed); its squared distance in d2.
+  const auto correspond = [&](long i, const Eigen::Vector3f& q, float& d2, bool& horizontal) -> bool {
+    if (!reuse) return target.nearest(q, c_max, matched[i], d2, &horizontal);
+    // Rounding allowance of the float distances and of nearest()'s voxel boxes [m].
+    const float eps = 1e-4f + 1e-6f * q.cwiseAbs().maxCoeff();
+    if (hit[i]) {
+      const float d_last = (q - matched[i]).norm();
+      // matched[i] lies within the radius, so this finds a point (the nearest one).
+      if (d_last < c_max_f &&
+          target.nearest(q, std::min(c_max, static_cast<double>(d_last + eps)), matched[i], d2, &horizontal))
+        return true;
+    } else if (bounded[i] && lower[i] - (q - anchor[i]).norm() >= c_max_f + eps) {
+      return false;
+    }
+    const double radius = c_max + miss_margin;
+    Eigen::Vector3f m;
+    const bool found = target.nearest(q, radius, m, d2, &horizontal);
+    if (found && d2 < c_max2_f) {
+      matched[i] = m;
+      hit[i] = 1;
+      bounded[i] = 0;
+      return true;
+    }
+    hit[i] = 0;
+    bounded[i] = 1;
+    anchor[i] = q;
+    lower[i] = found ? std::sqrt(d2) : static_cast<float>(radius);
+    return false;
+  };
   Eigen::Matrix<double, 6, 1> last_step = Eigen::Matrix<double, 6, 1>::Zero();
   const bool skip_horizontal = !config.six_dof && config.ignore_horizontal;
   Eigen::Matrix<double, 6, 1> last_params = params(T);
@@ -254,8 +299,7 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
     for (long i = 0; i < n; ++i) {
       float d2;
       bool horizontal = false;
-      has[i] = target.nearest(Tf * source[i], c_max, matched[i], d2, &horizontal) && !(skip_horizontal && horizontal)
-                   ? 1 : 0;
+      has[i] = correspond(i, Tf * source[i], d2, horizontal) && !(skip_horizontal && horizontal) ? 1 : 0;
     }
     // Centroids and correlation (in double, relative to the current pose).
     // (The transformed source points are recomputed in double: float rounding would keep the
@@ -342,9 +386,9 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   const Eigen::Isometry3f Tf = T.cast<float>();
 #pragma omp parallel for reduction(+ : sum2, count) schedule(dynamic, 2048)
   for (long i = 0; i < n; ++i) {
-    Eigen::Vector3f m;
     float d2;
-    if (target.nearest(Tf * source[i], c_max, m, d2)) {
+    bool horizontal;
+    if (correspond(i, Tf * source[i], d2, horizontal)) {
       sum2 += d2;
       ++count;
     }

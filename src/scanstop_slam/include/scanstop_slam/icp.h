@@ -72,6 +72,9 @@ struct IcpConfig {
   /// 3dof: leave out correspondences on horizontal surfaces (floor, ceiling). They cannot fix x, y or
   /// yaw, but their near-identity pairs outnumber the walls' and hold every step back.
   bool ignore_horizontal = true;
+  /// Narrow or skip each point's nearest-neighbour search with bounds from its last search (exact:
+  /// the same correspondences as a full c_max search; false only to check that in tests).
+  bool reuse_search_bounds = true;
   // Failure detection.
   int min_correspondences = 200;
   double min_overlap = 0.05;          ///< correspondences / source points
