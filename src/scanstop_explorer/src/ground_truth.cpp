@@ -91,9 +91,9 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
 
 GroundTruthCoverage groundTruthCoverageOfMap(const TriangleMesh& world, const Pose2D& start_world,
                                              const MapDirectory& map, double robot_radius_m, double tolerance_m,
-                                             std::vector<std::string>* problems) {
+                                             std::vector<std::string>* problems, const ExplorerConfig& config) {
   if (map.size() == 0) throw std::invalid_argument("map directory " + map.dir() + " holds no scans");
-  Explorer ex;
+  Explorer ex(config);
   ex.loadMapDirectory(map, problems);
   GroundTruthCoverage c = groundTruthCoverage(world, start_world, ex.floorMap().states(), ex.floorMap().geometry(),
                                               start_world, robot_radius_m, 0.05, 0.03, 0.63, tolerance_m);

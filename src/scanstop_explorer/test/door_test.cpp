@@ -4,6 +4,7 @@
 // seen only through a door keeps exploration going although a nearby scan's knowledge disc covers it.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <random>
 #include <string>
@@ -315,5 +316,45 @@ TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCove
   char pattern[] = "/tmp/ground_truth_test_XXXXXX";
   ASSERT_NE(mkdtemp(pattern), nullptr);
   EXPECT_THROW(groundTruthCoverageOfMap(world, start, scanstop::MapDirectory(pattern), 0.3), std::invalid_argument);
+  EXPECT_EQ(std::system((std::string("rm -rf ") + pattern).c_str()), 0);
+}
+
+TEST(GroundTruthCoverage, OfAMapDirectoryUsesTheExplorerConfigurationGiven) {
+  // The room and corridor world above, one scan at the start that saw a few floor points 1.5 m
+  // around it: the floor map, and so the true coverage, depends on the explorer's configuration
+  // (here the known-free disc under the robot), which mission_node reads from the explorer's
+  // parameters (config/explorer.yaml), not the defaults.
+  scanstop::TriangleMesh world;
+  addBox(world, {-0.5f, -2.6f, -0.1f}, {4.5f, 4.5f, 0.0f});
+  addBox(world, {-0.1f, -2.2f, 0.0f}, {0.0f, 4.1f, 2.5f});
+  addBox(world, {4.0f, -2.2f, 0.0f}, {4.1f, 4.1f, 2.5f});
+  addBox(world, {-0.1f, 4.0f, 0.0f}, {4.1f, 4.1f, 2.5f});
+  addBox(world, {-0.1f, -2.2f, 0.0f}, {4.1f, -2.1f, 2.5f});
+  addBox(world, {-0.1f, -0.1f, 0.0f}, {0.4f, 0.0f, 2.5f});
+  addBox(world, {1.3f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});
+  const Pose2D start(2.0, 2.0, 0.0);
+  char pattern[] = "/tmp/ground_truth_cfg_test_XXXXXX";
+  ASSERT_NE(mkdtemp(pattern), nullptr);
+  {
+    scanstop::MapDirectory dir(pattern);
+    scanstop::PointCloud scan;
+    for (int i = 0; i < 360; ++i)
+      scan.points.emplace_back(1.5f * std::cos(i * 0.01745f), 1.5f * std::sin(i * 0.01745f), 0.0f);
+    scanstop::MapScanInfo info;
+    info.index = 0;
+    info.sensor_origin = Eigen::Vector3d(0, 0, 0.45);
+    dir.append(info, scan);
+  }
+  const scanstop::MapDirectory map(pattern);
+  ExplorerConfig small, large;
+  large.known_free_radius_m = 1.4;
+  const GroundTruthCoverage a = groundTruthCoverageOfMap(world, start, map, 0.3);
+  const GroundTruthCoverage b = groundTruthCoverageOfMap(world, start, map, 0.3, 0.1, nullptr, small);
+  const GroundTruthCoverage c = groundTruthCoverageOfMap(world, start, map, 0.3, 0.1, nullptr, large);
+  EXPECT_EQ(a.scans, 1u);
+  EXPECT_NEAR(a.observed_m2, b.observed_m2, 1e-9);  // default configuration = the defaults given
+  // The 1.4 m disc instead of 0.8 m: about pi (1.4^2 - 0.8^2) = 4.1 m2 more floor seen.
+  EXPECT_GT(c.observed_m2, a.observed_m2 + 3.0) << a.observed_m2 << " vs " << c.observed_m2;
+  EXPECT_NEAR(a.reachable_m2, c.reachable_m2, 1e-9);
   EXPECT_EQ(std::system((std::string("rm -rf ") + pattern).c_str()), 0);
 }

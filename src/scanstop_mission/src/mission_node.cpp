@@ -12,6 +12,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
+#include "scanstop_explorer/explorer_ros.h"
 #include "scanstop_explorer/ground_truth.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
@@ -58,7 +59,9 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "world_file", world_file_);
   ros_params::optional(pnh, "world_frame", world_frame_);
   ros_params::optional(pnh, "map_frame", map_frame_);
+  robot_radius_given_ = pnh.hasParam("robot_radius");
   ros_params::optional(pnh, "robot_radius", robot_radius_m_);
+  ros_params::optional(pnh, "explorer_ns", explorer_ns_);
   if (!(robot_radius_m_ > 0.0 && robot_radius_m_ <= 5.0))
     throw ConfigError("parameter '" + pnh.resolveName("robot_radius") + "' = " + std::to_string(robot_radius_m_) +
                       " m must be in (0, 5] m");
@@ -91,14 +94,14 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
             "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
-            "robot_radius"});
+            "robot_radius", "explorer_ns"});
   if (!unknown.empty()) {
     std::string names;
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
     throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
                       "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
-                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius");
+                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns");
   }
   try {
     config_.validate();
@@ -162,10 +165,22 @@ std::optional<TrueCoverage> MissionNode::trueCoverage() {
              world_frame_.c_str(), map_frame_.c_str());
     return std::nullopt;
   }
+  // The floor map as the explorer of this run built it: its parameters (config/explorer.yaml as
+  // loaded into its namespace), defaults where it has none.
+  explorer::ExplorerConfig explorer_config;
+  try {
+    explorer::NodeConfig unused;
+    explorer::readParameters(ros::NodeHandle(nh_, explorer_ns_), explorer_config, unused);
+  } catch (const std::exception& e) {
+    ROS_WARN("mission: the explorer's parameters in '%s' are not usable (%s); true coverage with its defaults",
+             explorer_ns_.c_str(), e.what());
+    explorer_config = explorer::ExplorerConfig();
+  }
+  const double robot_radius = robot_radius_given_ ? robot_radius_m_ : explorer_config.planner.robot_radius_m;
   try {
     const TriangleMesh world = readStl(world_file_);
-    const explorer::GroundTruthCoverage c =
-        explorer::groundTruthCoverageOfMap(world, *start, MapDirectory(map_dir_), robot_radius_m_);
+    const explorer::GroundTruthCoverage c = explorer::groundTruthCoverageOfMap(
+        world, *start, MapDirectory(map_dir_), robot_radius, 0.1, nullptr, explorer_config);
     return TrueCoverage{c.coverage, c.reachable_m2};
   } catch (const std::exception& e) {
     ROS_WARN("mission: no true coverage (%s: %s)", world_file_.c_str(), e.what());

@@ -12,6 +12,7 @@
 #include "scanstop_common/cloud.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/pose.h"
+#include "scanstop_explorer/explorer.h"
 #include "scanstop_explorer/grid.h"
 
 namespace scanstop {
@@ -38,12 +39,14 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
                                         double robot_radius_m, double resolution = 0.05, double z_lo = 0.03,
                                         double z_hi = 0.63, double tolerance_m = 0.1);
 
-/// The same for a map directory: builds the explorer's floor map (default configuration) from its
-/// scans, whose map frame is start_world in the world (as sim_node's), and compares. `problems`
-/// receives the map directory's skipped files. Throws std::invalid_argument for an empty map.
+/// The same for a map directory: builds the explorer's floor map (with `config`, the explorer's
+/// configuration of the run) from its scans, whose map frame is start_world in the world (as
+/// sim_node's), and compares. `problems` receives the map directory's skipped files. Throws
+/// std::invalid_argument for an empty map.
 GroundTruthCoverage groundTruthCoverageOfMap(const TriangleMesh& world, const Pose2D& start_world,
                                              const MapDirectory& map, double robot_radius_m, double tolerance_m = 0.1,
-                                             std::vector<std::string>* problems = nullptr);
+                                             std::vector<std::string>* problems = nullptr,
+                                             const ExplorerConfig& config = ExplorerConfig());
 
 }  // namespace explorer
 }  // namespace scanstop

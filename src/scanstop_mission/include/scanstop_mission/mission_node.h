@@ -53,6 +53,8 @@ class MissionNode {
   // Ground-truth coverage in simulation: the world mesh, and sim_node's static world -> map (the start).
   std::string world_file_, world_frame_ = "world", map_frame_ = "map";
   double robot_radius_m_ = 0.3;
+  bool robot_radius_given_ = false;  ///< ~robot_radius set; otherwise the explorer's robot_radius_m
+  std::string explorer_ns_ = "explorer_node";  ///< where the explorer's parameters are (true coverage)
   ros::Subscriber static_tf_sub_;
   std::mutex start_mutex_;
   std::optional<Pose2D> world_T_map_;
