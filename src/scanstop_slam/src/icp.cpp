@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <unordered_set>
@@ -25,6 +26,12 @@ VoxelMap::VoxelMap(double voxel_m, int max_points_per_voxel, double min_spacing_
 
 namespace {
 /// splitmix64's finalizer: spreads neighbouring voxel keys over the whole table.
+/// 4 floats as one value: GCC/Clang vector extension, one SSE2 register (x86-64 baseline; 8-wide
+/// values without AVX make GCC lower the lane-wise minimum to scalar code).
+typedef float Quad __attribute__((vector_size(sizeof(float) * 4)));
+#define SCANSTOP_SPLAT4(v) Quad{v, v, v, v}
+typedef int32_t QuadMask __attribute__((vector_size(sizeof(int32_t) * 4)));  ///< lane-wise comparison
+
 inline uint64_t mixKey(uint64_t k) {
   k ^= k >> 30;
   k *= 0xbf58476d1ce4e5b9ULL;
@@ -76,15 +83,25 @@ VoxelMap::Key VoxelMap::key(int x, int y, int z) const {
   return (enc(x) << 42) | (enc(y) << 21) | enc(z);
 }
 
+void VoxelMap::Cell::push(const Eigen::Vector3f& p) {
+  const size_t lane = count % kLanes;
+  if (lane == 0) blocks.resize(blocks.size() + 3 * kLanes, std::numeric_limits<float>::infinity());
+  float* b = &blocks[blocks.size() - 3 * kLanes + lane];
+  b[0] = p.x();
+  b[kLanes] = p.y();
+  b[2 * kLanes] = p.z();
+  ++count;
+}
+
 void VoxelMap::classify(Cell& cell) {
   cell.horizontal = false;
-  if (cell.points.size() < 5) return;
+  if (cell.count < 5) return;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& p : cell.points) mean += p.cast<double>();
-  mean /= static_cast<double>(cell.points.size());
+  for (size_t i = 0; i < cell.count; ++i) mean += cell.point(i).cast<double>();
+  mean /= static_cast<double>(cell.count);
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& p : cell.points) {
-    const Eigen::Vector3d d = p.cast<double>() - mean;
+  for (size_t i = 0; i < cell.count; ++i) {
+    const Eigen::Vector3d d = cell.point(i).cast<double>() - mean;
     cov += d * d.transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
@@ -101,18 +118,18 @@ void VoxelMap::add(const std::vector<Eigen::Vector3f>& points) {
     const int y = static_cast<int>(std::floor(p.y() / voxel_));
     const int z = static_cast<int>(std::floor(p.z() / voxel_));
     const int32_t c = findOrAddCell(key(x, y, z));
-    auto& cell = cells_[c].points;
-    if (static_cast<int>(cell.size()) >= max_per_voxel_) continue;
+    Cell& cell = cells_[c];
+    if (cell.count >= static_cast<uint32_t>(max_per_voxel_)) continue;
     if (min_spacing2_ > 0.0f) {
       bool crowded = false;
-      for (const auto& q : cell)
-        if ((q - p).squaredNorm() < min_spacing2_) {
+      for (size_t i = 0; i < cell.count; ++i)
+        if ((cell.point(i) - p).squaredNorm() < min_spacing2_) {
           crowded = true;
           break;
         }
       if (crowded) continue;
     }
-    cell.push_back(p);
+    cell.push(p);
     touched.push_back(c);
     ++size_;
   }
@@ -134,6 +151,8 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
   const float hi[3] = {vs - lo[0], vs - lo[1], vs - lo[2]};
   float best = static_cast<float>(radius_m * radius_m);
   bool found = false;
+  static_assert(kLanes % 4 == 0, "a block row is whole SSE registers");
+  const Quad qx = SCANSTOP_SPLAT4(q.x()), qy = SCANSTOP_SPLAT4(q.y()), qz = SCANSTOP_SPLAT4(q.z());
   const auto scan = [&](int dx, int dy, int dz) {
     const int d[3] = {dx, dy, dz};
     float box2 = 0.0f;
@@ -145,14 +164,52 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
     const int32_t c = findCell(key(x + dx, y + dy, z + dz));
     if (c < 0) return;
     const Cell& cell = cells_[c];
-    for (const auto& p : cell.points) {
-      const float d2 = (p - q).squaredNorm();
-      if (d2 < best) {
-        best = d2;
-        out = p;
-        found = true;
-        if (horizontal) *horizontal = cell.horizontal;
+    const float* blocks = cell.blocks.data();
+    const size_t n_blocks = cell.blocks.size() / (3 * kLanes);
+    // Chunks of blocks: every squared distance of a chunk into dist (SIMD, the same float operations
+    // in the same order as Eigen's (p - q).squaredNorm(): dx*dx + (dy*dy + dz*dz)) and their lane-wise
+    // minimum with best; then the first point of the chunk at that minimum, if it is below best.
+    // That is the point the plain loop "if (d2 < best) take it" picks: exact, ties to the first.
+    constexpr size_t kChunk = 32;  // blocks
+    constexpr int kQuads = kLanes / 4;
+    Quad dist[kChunk * kQuads];
+    for (size_t b0 = 0; b0 < n_blocks; b0 += kChunk) {
+      const size_t nb = std::min(kChunk, n_blocks - b0);
+      Quad m[kQuads];
+      for (int h = 0; h < kQuads; ++h) m[h] = SCANSTOP_SPLAT4(best);
+      for (size_t b = 0; b < nb; ++b) {
+        const float* p = blocks + (b0 + b) * 3 * kLanes;
+        for (int h = 0; h < kQuads; ++h) {  // independent halves: two minimum chains in flight
+          Quad px, py, pz;
+          std::memcpy(&px, p + 4 * h, sizeof(Quad));
+          std::memcpy(&py, p + kLanes + 4 * h, sizeof(Quad));
+          std::memcpy(&pz, p + 2 * kLanes + 4 * h, sizeof(Quad));
+          const Quad ex = px - qx, ey = py - qy, ez = pz - qz;
+          const Quad d2 = ex * ex + (ey * ey + ez * ez);
+          dist[b * kQuads + h] = d2;
+          m[h] = d2 < m[h] ? d2 : m[h];
+        }
       }
+      float chunk_min = best;
+      for (int h = 0; h < kQuads; ++h)
+        for (int l = 0; l < 4; ++l) chunk_min = m[h][l] < chunk_min ? m[h][l] : chunk_min;
+      if (!(chunk_min < best)) continue;
+      // The first lane at the minimum (padding lanes are +inf, never the minimum): a whole
+      // register compared at a time, then its lanes.
+      const Quad at = SCANSTOP_SPLAT4(chunk_min);
+      size_t j = 0;
+      for (;; ++j) {
+        const QuadMask eq = dist[j] == at;
+        uint64_t bits[2];
+        std::memcpy(bits, &eq, sizeof(bits));
+        if (bits[0] | bits[1]) break;
+      }
+      size_t i = 4 * j;
+      while (dist[j][i % 4] != chunk_min) ++i;
+      best = chunk_min;
+      out = cell.point(b0 * kLanes + i);
+      found = true;
+      if (horizontal) *horizontal = cell.horizontal;
     }
   };
   scan(0, 0, 0);
@@ -178,7 +235,8 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
 std::vector<Eigen::Vector3f> VoxelMap::points() const {
   std::vector<Eigen::Vector3f> out;
   out.reserve(size_);
-  for (const auto& cell : cells_) out.insert(out.end(), cell.points.begin(), cell.points.end());
+  for (const auto& cell : cells_)
+    for (size_t i = 0; i < cell.count; ++i) out.push_back(cell.point(i));
   return out;
 }
 

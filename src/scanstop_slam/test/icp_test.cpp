@@ -6,7 +6,9 @@
 #include <fstream>
 #include <iostream>
 #include <random>
+#include <set>
 #include <sstream>
+#include <tuple>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/shared_data.h"
@@ -183,6 +185,89 @@ TEST(VoxelMap, NearestIsExactForRadiiUpToSeveralVoxels) {
     }
   }
   EXPECT_GT(found_count, 1000);  // the radii both find and miss
+}
+
+TEST(VoxelMap, NearestInDenseVoxelsIsTheFirstStoredOfExactTies) {
+  // nearest() computes a voxel's distances in SIMD blocks of several points (the last block
+  // padded) and chunks of blocks: it must return the very point a plain loop over the voxel's
+  // points in insertion order with "d2 < best" returns, the first stored one of exact ties. Points
+  // and queries on a 1/32 m grid inside one 1 m voxel make many exact ties (every difference,
+  // square and sum is exact in float); sizes around the block and chunk widths.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> cell(4, 28), qcell(0, 31);
+  for (const int n : {1, 3, 7, 8, 9, 15, 16, 17, 100, 255, 256, 257, 511, 1000, 3001}) {
+    std::vector<Eigen::Vector3f> pts;
+    std::set<std::tuple<int, int, int>> used;
+    while (static_cast<int>(pts.size()) < n) {
+      const int a = cell(rng), b = cell(rng), c = cell(rng);
+      if (used.insert({a, b, c}).second) pts.emplace_back(a / 32.0f, b / 32.0f, c / 32.0f);
+    }
+    VoxelMap map(1.0, 100000);
+    map.add(pts);
+    ASSERT_EQ(map.points(), pts) << n;  // one voxel: points() keeps the insertion order
+    int ties = 0;
+    for (int q = 0; q < 400; ++q) {
+      // Queries on the grid inside the voxel (exact ties at equal grid offsets).
+      const Eigen::Vector3f query(qcell(rng) / 32.0f, qcell(rng) / 32.0f, qcell(rng) / 32.0f);
+      const double radius = 0.3;
+      float brute = static_cast<float>(radius * radius);
+      int brute_index = -1, at_min = 0;
+      for (int i = 0; i < n; ++i) {
+        const float d2 = (pts[i] - query).squaredNorm();
+        if (d2 < brute) brute = d2, brute_index = i, at_min = 0;
+        if (d2 == brute) ++at_min;
+      }
+      ties += at_min > 1;
+      Eigen::Vector3f out(-1.0f, -1.0f, -1.0f);
+      float d2 = -1.0f;
+      const bool found = map.nearest(query, radius, out, d2);
+      ASSERT_EQ(found, brute_index >= 0) << n << " points, query " << query.transpose();
+      if (!found) continue;
+      ASSERT_EQ(out, pts[brute_index]) << n << " points, query " << query.transpose() << ", " << at_min
+                                       << " at the minimum";
+      ASSERT_EQ(d2, brute);
+    }
+    if (n >= 100) {
+      EXPECT_GT(ties, 15) << n;  // the grid does make ties
+    }
+  }
+}
+
+TEST(VoxelMap, NearestIsExactInDenseVoxels) {
+  // Hundreds of random points per voxel (clusters denser than a voxel), queries anywhere, radii
+  // below, at and above the voxel: the same point as a scan of every point (not just its distance).
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f), n(-0.08f, 0.08f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int c = 0; c < 12; ++c) {
+    const Eigen::Vector3f centre(u(rng), u(rng), u(rng));
+    for (int i = 0; i < 997; ++i) pts.emplace_back(centre + Eigen::Vector3f(n(rng), n(rng), n(rng)));
+  }
+  VoxelMap map(0.1, 100000);
+  map.add(pts);
+  ASSERT_EQ(map.size(), pts.size());
+  int found_count = 0;
+  for (double radius : {0.03, 0.1, 0.25}) {
+    for (int q = 0; q < 1500; ++q) {
+      const Eigen::Vector3f query(u(rng), u(rng), u(rng));
+      float brute = static_cast<float>(radius * radius);
+      int brute_index = -1;
+      for (size_t i = 0; i < pts.size(); ++i) {
+        const float d2 = (pts[i] - query).squaredNorm();
+        if (d2 < brute) brute = d2, brute_index = static_cast<int>(i);
+      }
+      Eigen::Vector3f out;
+      float d2 = 0.0f;
+      const bool found = map.nearest(query, radius, out, d2);
+      ASSERT_EQ(found, brute_index >= 0) << "radius " << radius << " query " << query.transpose();
+      if (found) {
+        ASSERT_EQ(out, pts[brute_index]) << "radius " << radius << " query " << query.transpose();
+        ASSERT_EQ(d2, brute);
+        ++found_count;
+      }
+    }
+  }
+  EXPECT_GT(found_count, 1000);
 }
 
 TEST(Icp, AccelerationAndWallsOnlyReachTheOptimumWhereTheThesisCriterionStopsShort) {

@@ -44,10 +44,20 @@ class VoxelMap {
   int max_per_voxel_;
   float min_spacing2_;
   size_t size_ = 0;
+  /// A voxel's points as blocks of kLanes points, each block x[kLanes], y[kLanes], z[kLanes]
+  /// (structure of arrays within a block; the last block's unused lanes hold +inf), so nearest()
+  /// computes a whole block's squared distances with SIMD instructions of the baseline ISA.
+  static constexpr int kLanes = 8;
   struct Cell {
     Key key = 0;
-    std::vector<Eigen::Vector3f> points;
-    bool horizontal = false;  ///< the points lie on a horizontal plane (PCA normal within 20 deg of z)
+    std::vector<float> blocks;  ///< 3 * kLanes floats per block
+    uint32_t count = 0;         ///< points stored (in the order they were added)
+    bool horizontal = false;    ///< the points lie on a horizontal plane (PCA normal within 20 deg of z)
+    Eigen::Vector3f point(size_t i) const {
+      const float* b = &blocks[(i / kLanes) * 3 * kLanes + i % kLanes];
+      return Eigen::Vector3f(b[0], b[kLanes], b[2 * kLanes]);
+    }
+    void push(const Eigen::Vector3f& p);
   };
   static void classify(Cell& cell);
   /// Open-addressing hash (linear probing, power-of-two table, at most half full) from voxel key
