@@ -5,7 +5,7 @@
 /// iterations, map size and the pose error against the truth next to the odometry's error.
 /// The last line is the time of the last scan against the map of all the others.
 ///
-/// usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M]
+/// usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M (0 = no refinement)]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -51,7 +51,7 @@ std::vector<Entry> readList(const std::string& path) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::cerr << "usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M]\n"
+    std::cerr << "usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M]\n"
                  "  LIST: lines 'FILE x y yaw' (scan in base_link, true pose in the world [m, rad])\n";
     return 2;
   }
@@ -66,6 +66,7 @@ int main(int argc, char** argv) {
         config.icp.six_dof = v == "6dof";
       } else if (a == "--c-max") config.icp.c_max_m = std::stod(v);
       else if (a == "--coarse-c-max") config.coarse_c_max_m = std::stod(v);
+      else if (a == "--refine-t-c") config.refine_t_c_m = std::stod(v);
       else throw ConfigError("unknown option " + a);
     }
     config.validate();

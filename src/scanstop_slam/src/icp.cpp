@@ -300,6 +300,8 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   const long n = static_cast<long>(source.size());
   std::vector<Eigen::Vector3f> matched(source.size());
   std::vector<uint8_t> has(source.size(), 0);
+  std::vector<float> dist2(config.unique_matches ? source.size() : 0);  // of each pair (unique_matches)
+  std::vector<uint32_t> order;                                          // pairs sorted by map point
   const double c_max = config.c_max_m;
   // Exact shortcuts of the correspondence search, from what the last search of each point found.
   // A hit (its nearest map point m within c_max): m is a map point, so the nearest one now is no
@@ -358,6 +360,24 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
       float d2;
       bool horizontal = false;
       has[i] = correspond(i, Tf * source[i], d2, horizontal) && !(skip_horizontal && horizontal) ? 1 : 0;
+      if (config.unique_matches) dist2[i] = d2;
+    }
+    if (config.unique_matches) {
+      // Of the source points paired with one map point (equal coordinates: the same stored point)
+      // only the nearest keeps it (ties: the lower index, so the result does not depend on threads).
+      order.clear();
+      for (long i = 0; i < n; ++i)
+        if (has[i]) order.push_back(static_cast<uint32_t>(i));
+      std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        const Eigen::Vector3f& p = matched[a];
+        const Eigen::Vector3f& q = matched[b];
+        if (p.x() != q.x()) return p.x() < q.x();
+        if (p.y() != q.y()) return p.y() < q.y();
+        if (p.z() != q.z()) return p.z() < q.z();
+        return dist2[a] != dist2[b] ? dist2[a] < dist2[b] : a < b;
+      });
+      for (size_t k = 1; k < order.size(); ++k)
+        if (matched[order[k]] == matched[order[k - 1]]) has[order[k]] = 0;
     }
     // Centroids and correlation (in double, relative to the current pose).
     // (The transformed source points are recomputed in double: float rounding would keep the

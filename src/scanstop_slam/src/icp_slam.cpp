@@ -14,6 +14,10 @@ void SlamConfig::validate() const {
   icp.validate();
   requireInRange("coarse_c_max", coarse_c_max_m, 0.0, 5.0, "m");
   requireInRange("source_voxel", source_voxel_m, 0.0, 1.0, "m");
+  requireInRange("refine_t_c", refine_t_c_m, 0.0, 0.01, "m");
+  requireInRange("refine_r_c", refine_r_c_rad, 1e-9, 0.01, "rad");
+  requireInRange("refine_max_iterations", refine_max_iterations, 1, 10000);
+  requireInRange("refine_source_voxel", refine_source_voxel_m, 0.0, 1.0, "m");
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
   requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
@@ -82,6 +86,11 @@ std::vector<Eigen::Vector3f> IcpSlam::coarseSource(const std::vector<Eigen::Vect
   return voxelDownsample(source, std::max(config_.source_voxel_m, 0.05));
 }
 
+std::vector<Eigen::Vector3f> IcpSlam::refineSource(const std::vector<Eigen::Vector3f>& source) const {
+  return config_.refine_source_voxel_m > config_.source_voxel_m ? voxelDownsample(source, config_.refine_source_voxel_m)
+                                                                 : source;
+}
+
 Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& odom_pose,
                                    const Eigen::Vector3d& sensor_origin, double stamp_s) {
   const auto start = std::chrono::steady_clock::now();
@@ -115,6 +124,21 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     }
     IcpResult icp_result = icp(map_, source, start, config_.icp);
     icp_result.iterations += coarse_iterations;
+    if (icp_result.converged && config_.refine_t_c_m > 0.0) {
+      IcpConfig refine = config_.icp;
+      refine.unique_matches = true;
+      refine.t_c_m = config_.refine_t_c_m;
+      refine.r_c_rad = config_.refine_r_c_rad;
+      refine.max_iterations = config_.refine_max_iterations;
+      IcpResult refined = icp(map_, refineSource(source), icp_result.T_target_source, refine);
+      // Not settled within its iterations: the thesis stage's result stands.
+      if (refined.converged) {
+        refined.iterations += icp_result.iterations;
+        icp_result = refined;
+      } else {
+        icp_result.iterations += refined.iterations;
+      }
+    }
     if (icp_result.converged) {
       // The bound on the correction applies to the whole correction of the odometry guess.
       const Eigen::Isometry3d correction = r.guess.toIsometry3d().inverse() * icp_result.T_target_source;

@@ -53,6 +53,13 @@ class IcpSlamNode {
     optional("max_points_per_voxel", config.max_points_per_voxel);
     optional("map_spacing", config.map_spacing_m);
     optional("coarse_c_max", config.coarse_c_max_m);
+    optional("refine_t_c", config.refine_t_c_m);
+    double refine_r_c_deg = config.refine_r_c_rad * 180.0 / M_PI;
+    optional("refine_r_c_deg", refine_r_c_deg);
+    requireInRange(pnh.resolveName("refine_r_c_deg"), refine_r_c_deg, 1e-7, 0.5, "deg");
+    config.refine_r_c_rad = refine_r_c_deg * M_PI / 180.0;
+    optional("refine_max_iterations", config.refine_max_iterations);
+    optional("refine_source_voxel", config.refine_source_voxel_m);
     optional("accelerate", config.icp.accelerate);
     optional("ignore_horizontal", config.icp.ignore_horizontal);
     optional("max_point_distance", config.max_point_distance_m);

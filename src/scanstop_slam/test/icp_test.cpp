@@ -339,6 +339,47 @@ TEST(Icp, SearchBoundsGiveTheSameResultAsFullSearches) {
   }
 }
 
+/// A 2 m wide corridor (walls y = 0 and y = 2, 2.5 m high) between x0 and x1, with a pillar at
+/// x in [3, 3.3] (its two faces across the corridor fix x, weakly: a twentieth of the points); 2 mm noise.
+std::vector<Eigen::Vector3f> corridorPoints(std::mt19937& rng, float x0, float x1, int n) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> noise(0.0f, 0.002f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < n; ++i) {
+    const float a = u(rng), b = u(rng);
+    if (i % 40 == 0) pts.emplace_back(3.0f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);       // pillar, west face
+    else if (i % 40 == 1) pts.emplace_back(3.3f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);  // east face
+    else pts.emplace_back(x0 + (x1 - x0) * a, (i % 2 ? 2.0f : 0.0f) + noise(rng), 2.5f * b);  // walls
+  }
+  return pts;
+}
+
+TEST(Icp, UniqueMatchesDoNotPullAScanBackOntoTheMapsEdge) {
+  // The map saw the corridor for x in [0, 4] (the earlier scans' range ended there), the new scan
+  // sees x in [2, 6]; it starts at its true pose. Point-to-point ICP pairs every scan point up to
+  // c_max past x = 4 with the map's edge and slides the scan back towards the map; with unique
+  // matches each edge point takes one partner and the scan stays.
+  std::mt19937 rng(11);
+  VoxelMap map(0.1, 30);
+  map.add(corridorPoints(rng, 0.0f, 4.0f, 120000));
+  const std::vector<Eigen::Vector3f> scan = corridorPoints(rng, 2.0f, 6.0f, 40000);
+  IcpConfig c;  // the thesis' c_max 0.1 m, tight tolerances (to where each ICP settles)
+  c.t_c_m = 1e-6;
+  c.r_c_rad = 1e-6;
+  c.max_iterations = 2000;
+  c.max_correction_m = 5.0;
+  const IcpResult plain = icp(map, scan, Eigen::Isometry3d::Identity(), c);
+  c.unique_matches = true;
+  const IcpResult unique = icp(map, scan, Eigen::Isometry3d::Identity(), c);
+  ASSERT_TRUE(unique.converged) << unique.failure;
+  std::cout << "from the true pose: plain ICP settles at x = " << plain.T_target_source.translation().x()
+            << " m (" << plain.iterations << " iterations), with unique matches at x = "
+            << unique.T_target_source.translation().x() << " m (" << unique.iterations << ")" << std::endl;
+  EXPECT_LT(plain.T_target_source.translation().x(), -0.02);  // pulled back towards the map
+  EXPECT_LT(unique.T_target_source.translation().norm(), 0.005);
+  EXPECT_LT(rotationError(unique.T_target_source, Eigen::Isometry3d::Identity()), 0.002);
+}
+
 TEST(Icp, FailureIsDetectedOnCloudsThatDoNotOverlap) {
   std::mt19937 rng(11);
   const std::vector<Eigen::Vector3f> src = roomPoints(rng, 3000);

@@ -12,10 +12,10 @@ while the odometry alone is off by much more. Both errors are printed for every 
 receives the true pose of every scan (as mission_state.yaml holds them) for
 `icp_replay MAP_DIR --truth FILE`.
 
-The issue's target is 2 cm and 0.3 deg; this route ends at 2.6 cm and 0.44 deg (up to 10.7 cm on
-the way: from (6, 3) the east and west walls are 4 and 6 m away, at the URG's 5.6 m limit and with
-4-6 cm of range noise, so x is weakly held). The bounds in sim_route.test (3 cm, 0.5 deg) guard
-today's accuracy against regressions."""
+The bounds in sim_route.test are the issue's target, 2 cm and 0.3 deg. The route ends at 0.3 cm and
+0.12 deg (up to 5.1 cm on the way: from (6, 3) the east and west walls are 4 and 6 m away, at the
+URG's 5.6 m limit, and the map of the first three scans holds x only weakly); before IcpSlam's
+refinement stage (unique matches, tight tolerances) it ended at 2.6 cm and 0.44 deg."""
 import math
 import sys
 import unittest

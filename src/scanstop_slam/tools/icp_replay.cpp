@@ -21,7 +21,8 @@ namespace {
 
 void usage() {
   std::cerr << "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof]\n"
-               "                  [--coarse-c-max M (0 = single stage)]\n"
+               "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
+               "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
                "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
                "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n";
 }
@@ -69,6 +70,10 @@ int main(int argc, char** argv) {
         config.icp.six_dof = m == "6dof";
       } else if (a == "--c-max") config.icp.c_max_m = std::stod(next());
       else if (a == "--coarse-c-max") config.coarse_c_max_m = std::stod(next());
+      else if (a == "--refine-t-c") config.refine_t_c_m = std::stod(next());
+      else if (a == "--refine-r-c-deg") config.refine_r_c_rad = std::stod(next()) * M_PI / 180.0;
+      else if (a == "--refine-max-iterations") config.refine_max_iterations = std::stoi(next());
+      else if (a == "--refine-source-voxel") config.refine_source_voxel_m = std::stod(next());
       else if (a == "--t-c") config.icp.t_c_m = std::stod(next());
       else if (a == "--r-c-deg") config.icp.r_c_rad = std::stod(next()) * M_PI / 180.0;
       else if (a == "--max-iterations") config.icp.max_iterations = std::stoi(next());

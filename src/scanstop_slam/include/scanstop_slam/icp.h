@@ -85,6 +85,14 @@ struct IcpConfig {
   /// Narrow or skip each point's nearest-neighbour search with bounds from its last search (exact:
   /// the same correspondences as a full c_max search; false only to check that in tests).
   bool reuse_search_bounds = true;
+  /// Each map point pairs with one source point at most, the nearest; the others sharing it have no
+  /// partner in that iteration. Point-to-point ICP otherwise pulls a scan back onto the map: where
+  /// the scan reaches past the map's edge (new ground, a wall running on past the range of the
+  /// earlier scans) every source point up to c_max beyond the edge pairs with the edge, all
+  /// pulling the same way (room_10x8 route: a scan held at the true pose slides 4-7 cm, with tight
+  /// t_c up to 1 m, towards the earlier scans). Steps become small, so it needs a tight t_c / r_c
+  /// (IcpSlam's refinement stage).
+  bool unique_matches = false;
   // Failure detection.
   int min_correspondences = 200;
   double min_overlap = 0.05;          ///< correspondences / source points
