@@ -262,11 +262,10 @@ void addBox(scanstop::TriangleMesh& m, const Eigen::Vector3f& lo, const Eigen::V
                         {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
   for (const auto& t : f) m.faces.emplace_back(b + t[0], b + t[1], b + t[2]);
 }
-}  // namespace
 
-TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCovered) {
-  // World: room x, y in [0, 4], corridor y in [-2.1, -0.1] behind a 0.1 m wall with a 0.9 m door
-  // x in [0.4, 1.3]; outer walls; a floor slab (below the obstacle layer: ignored).
+/// Room x, y in [0, 4], corridor y in [-2.1, -0.1] behind a 0.1 m wall with a 0.9 m door
+/// x in [0.4, 1.3]; outer walls; a floor slab (below the obstacle layer: ignored).
+scanstop::TriangleMesh roomAndCorridor() {
   scanstop::TriangleMesh world;
   addBox(world, {-0.5f, -2.6f, -0.1f}, {4.5f, 4.5f, 0.0f});
   addBox(world, {-0.1f, -2.2f, 0.0f}, {0.0f, 4.1f, 2.5f});   // west
@@ -275,6 +274,13 @@ TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCove
   addBox(world, {-0.1f, -2.2f, 0.0f}, {4.1f, -2.1f, 2.5f});  // corridor south
   addBox(world, {-0.1f, -0.1f, 0.0f}, {0.4f, 0.0f, 2.5f});   // room south, west of the door
   addBox(world, {1.3f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});    // room south, east of the door
+  return world;
+}
+}  // namespace
+
+TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCovered) {
+  // World: roomAndCorridor().
+  const scanstop::TriangleMesh world = roomAndCorridor();
   const Pose2D start(2.0, 2.0, 0.0);
   // Explorer maps in the map frame (= the start pose): the room seen, the corridor not / also.
   GridGeometry mg;
@@ -320,18 +326,11 @@ TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCove
 }
 
 TEST(GroundTruthCoverage, OfAMapDirectoryUsesTheExplorerConfigurationGiven) {
-  // The room and corridor world above, one scan at the start that saw a few floor points 1.5 m
+  // roomAndCorridor(), one scan at the start that saw a few floor points 1.5 m
   // around it: the floor map, and so the true coverage, depends on the explorer's configuration
   // (here the known-free disc under the robot), which mission_node reads from the explorer's
   // parameters (config/explorer.yaml), not the defaults.
-  scanstop::TriangleMesh world;
-  addBox(world, {-0.5f, -2.6f, -0.1f}, {4.5f, 4.5f, 0.0f});
-  addBox(world, {-0.1f, -2.2f, 0.0f}, {0.0f, 4.1f, 2.5f});
-  addBox(world, {4.0f, -2.2f, 0.0f}, {4.1f, 4.1f, 2.5f});
-  addBox(world, {-0.1f, 4.0f, 0.0f}, {4.1f, 4.1f, 2.5f});
-  addBox(world, {-0.1f, -2.2f, 0.0f}, {4.1f, -2.1f, 2.5f});
-  addBox(world, {-0.1f, -0.1f, 0.0f}, {0.4f, 0.0f, 2.5f});
-  addBox(world, {1.3f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});
+  const scanstop::TriangleMesh world = roomAndCorridor();
   const Pose2D start(2.0, 2.0, 0.0);
   char pattern[] = "/tmp/ground_truth_cfg_test_XXXXXX";
   ASSERT_NE(mkdtemp(pattern), nullptr);
