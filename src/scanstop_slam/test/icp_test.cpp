@@ -151,16 +151,25 @@ TEST(VoxelMap, MarksHorizontalSurfaces) {
   EXPECT_FALSE(horizontal);  // wall
 }
 
+/// `clusters` clusters of `per_cluster` points, centres uniform in [-extent, extent]^3, points
+/// uniform within +-spread of their centre (the same random sequence as drawing them inline).
+std::vector<Eigen::Vector3f> clusteredPoints(std::mt19937& rng, float extent, float spread, int clusters,
+                                             int per_cluster) {
+  std::uniform_real_distribution<float> u(-extent, extent), n(-spread, spread);
+  std::vector<Eigen::Vector3f> pts;
+  for (int c = 0; c < clusters; ++c) {
+    const Eigen::Vector3f centre(u(rng), u(rng), u(rng));
+    for (int i = 0; i < per_cluster; ++i) pts.emplace_back(centre + Eigen::Vector3f(n(rng), n(rng), n(rng)));
+  }
+  return pts;
+}
+
 TEST(VoxelMap, NearestIsExactForRadiiUpToSeveralVoxels) {
   // Sparse clustered points and queries anywhere: the shell-by-shell search with its early stop
   // must find what a scan of every point finds, for radii below, at and several times the voxel.
   std::mt19937 rng(11);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f), n(-0.03f, 0.03f);
-  std::vector<Eigen::Vector3f> pts;
-  for (int c = 0; c < 40; ++c) {
-    const Eigen::Vector3f centre(u(rng), u(rng), u(rng));
-    for (int i = 0; i < 20; ++i) pts.emplace_back(centre + Eigen::Vector3f(n(rng), n(rng), n(rng)));
-  }
+  const std::vector<Eigen::Vector3f> pts = clusteredPoints(rng, 1.0f, 0.03f, 40, 20);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);  // queries
   VoxelMap map(0.1, 1000);
   map.add(pts);
   int found_count = 0;
@@ -237,12 +246,8 @@ TEST(VoxelMap, NearestIsExactInDenseVoxels) {
   // Hundreds of random points per voxel (clusters denser than a voxel), queries anywhere, radii
   // below, at and above the voxel: the same point as a scan of every point (not just its distance).
   std::mt19937 rng(13);
-  std::uniform_real_distribution<float> u(-0.5f, 0.5f), n(-0.08f, 0.08f);
-  std::vector<Eigen::Vector3f> pts;
-  for (int c = 0; c < 12; ++c) {
-    const Eigen::Vector3f centre(u(rng), u(rng), u(rng));
-    for (int i = 0; i < 997; ++i) pts.emplace_back(centre + Eigen::Vector3f(n(rng), n(rng), n(rng)));
-  }
+  const std::vector<Eigen::Vector3f> pts = clusteredPoints(rng, 0.5f, 0.08f, 12, 997);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);  // queries
   VoxelMap map(0.1, 100000);
   map.add(pts);
   ASSERT_EQ(map.size(), pts.size());
