@@ -83,13 +83,14 @@ VoxelMap::Key VoxelMap::key(int x, int y, int z) const {
   return (enc(x) << 42) | (enc(y) << 21) | enc(z);
 }
 
-void VoxelMap::Cell::push(const Eigen::Vector3f& p) {
+void VoxelMap::Cell::push(const Eigen::Vector3f& p, const Eigen::Vector3f& view) {
   const size_t lane = count % kLanes;
   if (lane == 0) blocks.resize(blocks.size() + 3 * kLanes, std::numeric_limits<float>::infinity());
   float* b = &blocks[blocks.size() - 3 * kLanes + lane];
   b[0] = p.x();
   b[kLanes] = p.y();
   b[2 * kLanes] = p.z();
+  for (int a = 0; a < 3; ++a) views.push_back(static_cast<int8_t>(std::lround(std::clamp(view[a], -1.0f, 1.0f) * 127.0f)));
   ++count;
 }
 
@@ -110,7 +111,39 @@ void VoxelMap::classify(Cell& cell) {
   cell.horizontal = planar && std::abs(eig.eigenvectors().col(0).z()) > std::cos(20.0 * M_PI / 180.0);
 }
 
-void VoxelMap::add(const std::vector<Eigen::Vector3f>& points) {
+void VoxelMap::estimateNormal(Cell& cell) const {
+  // The voxel's points and those of its 6 face neighbours: a voxel boundary may cut a thin slice off
+  // a noisy wall (3 cm of a 10 cm voxel with 1 cm noise is no plane by itself), and the neighbour
+  // across it holds the rest. Both faces of a thin wall give the same normal; the points' views
+  // tell the faces apart.
+  const int x = static_cast<int>((cell.key >> 42) & ((1 << 21) - 1)) - (1 << 20);
+  const int y = static_cast<int>((cell.key >> 21) & ((1 << 21) - 1)) - (1 << 20);
+  const int z = static_cast<int>(cell.key & ((1 << 21) - 1)) - (1 << 20);
+  static const int kOffsets[7][3] = {{0, 0, 0}, {-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum2 = Eigen::Matrix3d::Zero();
+  size_t n = 0;
+  for (const auto& o : kOffsets) {
+    const int32_t c = findCell(key(x + o[0], y + o[1], z + o[2]));
+    if (c < 0) continue;
+    const Cell& other = cells_[c];
+    for (size_t i = 0; i < other.count; ++i) {
+      const Eigen::Vector3d p = other.point(i).cast<double>();
+      sum += p;
+      sum2 += p * p.transpose();
+      ++n;
+    }
+  }
+  cell.planar = false;
+  if (n < 8) return;
+  const Eigen::Vector3d mean = sum / static_cast<double>(n);
+  const Eigen::Matrix3d cov = sum2 / static_cast<double>(n) - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  cell.normal = eig.eigenvectors().col(0).cast<float>();
+  cell.planar = eig.eigenvalues()(0) < 0.3 * eig.eigenvalues()(1);
+}
+
+void VoxelMap::add(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f* sensor_origin) {
   std::vector<int32_t> touched;
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
@@ -129,17 +162,25 @@ void VoxelMap::add(const std::vector<Eigen::Vector3f>& points) {
         }
       if (crowded) continue;
     }
-    cell.push(p);
+    Eigen::Vector3f view = Eigen::Vector3f::Zero();
+    if (sensor_origin) {
+      const Eigen::Vector3f d = *sensor_origin - p;
+      if (d.squaredNorm() > 0.0f) view = d.normalized();
+    }
+    cell.push(p, view);
     touched.push_back(c);
     ++size_;
   }
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-  for (const int32_t c : touched) classify(cells_[c]);
+  for (const int32_t c : touched) {
+    classify(cells_[c]);
+    estimateNormal(cells_[c]);
+  }
 }
 
 bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,
-                       bool* horizontal) const {
+                       bool* horizontal, Surface* surface) const {
   const float inv = static_cast<float>(1.0 / voxel_);
   const float vs = static_cast<float>(voxel_);
   const int x = static_cast<int>(std::floor(q.x() * inv));
@@ -210,6 +251,11 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
       out = cell.point(b0 * kLanes + i);
       found = true;
       if (horizontal) *horizontal = cell.horizontal;
+      if (surface) {
+        surface->planar = cell.planar;
+        surface->normal = cell.normal;
+        surface->view = cell.view(b0 * kLanes + i);
+      }
     }
   };
   scan(0, 0, 0);
@@ -294,7 +340,7 @@ Eigen::Isometry3d fromParams(const Eigen::Matrix<double, 6, 1>& p) {
 }  // namespace
 
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
-              const IcpConfig& config) {
+              const IcpConfig& config, const Eigen::Vector3f* source_origin) {
   IcpResult result;
   Eigen::Isometry3d T = T_init;
   const long n = static_cast<long>(source.size());
@@ -320,22 +366,22 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   std::vector<Eigen::Vector3f> anchor(reuse ? source.size() : 0);
   std::vector<float> lower(reuse ? source.size() : 0);  // nearest map point distance at anchor >= this [m]
   // The nearest map point within c_max of q (point i transformed); its squared distance in d2.
-  const auto correspond = [&](long i, const Eigen::Vector3f& q, float& d2, bool& horizontal) -> bool {
-    if (!reuse) return target.nearest(q, c_max, matched[i], d2, &horizontal);
+  const auto correspond = [&](long i, const Eigen::Vector3f& q, float& d2, bool& horizontal, Surface* surface) -> bool {
+    if (!reuse) return target.nearest(q, c_max, matched[i], d2, &horizontal, surface);
     // Rounding allowance of the float distances and of nearest()'s voxel boxes [m].
     const float eps = 1e-4f + 1e-6f * q.cwiseAbs().maxCoeff();
     if (hit[i]) {
       const float d_last = (q - matched[i]).norm();
       // matched[i] lies within the radius, so this finds a point (the nearest one).
       if (d_last < c_max_f &&
-          target.nearest(q, std::min(c_max, static_cast<double>(d_last + eps)), matched[i], d2, &horizontal))
+          target.nearest(q, std::min(c_max, static_cast<double>(d_last + eps)), matched[i], d2, &horizontal, surface))
         return true;
     } else if (bounded[i] && lower[i] - (q - anchor[i]).norm() >= c_max_f + eps) {
       return false;
     }
     const double radius = c_max + miss_margin;
     Eigen::Vector3f m;
-    const bool found = target.nearest(q, radius, m, d2, &horizontal);
+    const bool found = target.nearest(q, radius, m, d2, &horizontal, surface);
     if (found && d2 < c_max2_f) {
       matched[i] = m;
       hit[i] = 1;
@@ -348,18 +394,40 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
     lower[i] = found ? std::sqrt(d2) : static_cast<float>(radius);
     return false;
   };
+  // Same side (IcpConfig::same_side): where the map point's voxel is one plane and both points'
+  // viewing directions are known and clear of it (more than ~6 deg), they must lie on the same side.
+  const bool side_test = config.same_side && source_origin != nullptr;
+  const auto sameSide = [&](const Eigen::Vector3f& q, const Eigen::Vector3f& origin, const Surface& s) {
+    if (!s.planar) return true;
+    const float map_side = s.normal.dot(s.view);
+    const Eigen::Vector3f to_sensor = origin - q;
+    const float n = to_sensor.norm();
+    if (!(n > 0.0f)) return true;
+    const float source_side = s.normal.dot(to_sensor) / n;
+    constexpr float kClear = 0.1f;
+    return !((map_side > kClear && source_side < -kClear) || (map_side < -kClear && source_side > kClear));
+  };
+  // The nearest map point within c_max that may pair with point i (at q; origin: the source's
+  // sensor in the map frame).
+  const auto pair = [&](long i, const Eigen::Vector3f& q, const Eigen::Vector3f& origin, float& d2,
+                        bool& horizontal) -> bool {
+    Surface s;
+    if (!correspond(i, q, d2, horizontal, side_test ? &s : nullptr)) return false;
+    return !side_test || sameSide(q, origin, s);
+  };
   Eigen::Matrix<double, 6, 1> last_step = Eigen::Matrix<double, 6, 1>::Zero();
   const bool skip_horizontal = !config.six_dof && config.ignore_horizontal;
   Eigen::Matrix<double, 6, 1> last_params = params(T);
   for (int it = 1; it <= config.max_iterations; ++it) {
     result.iterations = it;
     const Eigen::Isometry3f Tf = T.cast<float>();
+    const Eigen::Vector3f origin = side_test ? Eigen::Vector3f(Tf * *source_origin) : Eigen::Vector3f::Zero();
     // Correspondences (parallel): nearest map point within c_max of each transformed source point.
 #pragma omp parallel for schedule(dynamic, 2048)
     for (long i = 0; i < n; ++i) {
       float d2;
       bool horizontal = false;
-      has[i] = correspond(i, Tf * source[i], d2, horizontal) && !(skip_horizontal && horizontal) ? 1 : 0;
+      has[i] = pair(i, Tf * source[i], origin, d2, horizontal) && !(skip_horizontal && horizontal) ? 1 : 0;
       if (config.unique_matches) dist2[i] = d2;
     }
     if (config.unique_matches) {
@@ -462,11 +530,12 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   double sum2 = 0.0;
   size_t count = 0;
   const Eigen::Isometry3f Tf = T.cast<float>();
+  const Eigen::Vector3f origin = side_test ? Eigen::Vector3f(Tf * *source_origin) : Eigen::Vector3f::Zero();
 #pragma omp parallel for reduction(+ : sum2, count) schedule(dynamic, 2048)
   for (long i = 0; i < n; ++i) {
     float d2;
     bool horizontal;
-    if (correspond(i, Tf * source[i], d2, horizontal)) {
+    if (pair(i, Tf * source[i], origin, d2, horizontal)) {
       sum2 += d2;
       ++count;
     }

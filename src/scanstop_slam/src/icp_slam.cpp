@@ -18,6 +18,8 @@ void SlamConfig::validate() const {
   requireInRange("refine_r_c", refine_r_c_rad, 1e-9, 0.01, "rad");
   requireInRange("refine_max_iterations", refine_max_iterations, 1, 10000);
   requireInRange("refine_source_voxel", refine_source_voxel_m, 0.0, 1.0, "m");
+  requireInRange("refine_max_correction", refine_max_correction_m, 0.0, 10.0, "m");
+  requireInRange("refine_max_correction_angle", refine_max_correction_rad, 0.0, M_PI, "rad");
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
   requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
@@ -64,7 +66,8 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
       skipped_.push_back({dir_->dir() + "/" + info.file, "scan " + std::to_string(info.index) + ": " + problem});
       continue;
     }
-    map_.add(transformCloud(scan, info.map_pose.toIsometry3f()).points);
+    const Eigen::Vector3f origin = info.map_pose.toIsometry3f() * info.sensor_origin.cast<float>();
+    map_.add(transformCloud(scan, info.map_pose.toIsometry3f()).points, &origin);
   }
   count_ = static_cast<size_t>(dir_->nextIndex());
 }
@@ -106,6 +109,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   // scan defines the map: map = odom at the first scan.
   r.guess = count_ == 0 ? odom_pose : last_map_ * last_odom_.between(odom_pose);
   const std::vector<Eigen::Vector3f> source = voxelDownsample(scan_base.points, config_.source_voxel_m);
+  const Eigen::Vector3f origin = sensor_origin.cast<float>();
   if (map_.size() == 0) {  // the first scan (or every earlier one was skipped) defines the map
     r.map_pose = r.guess;
     r.converged = true;
@@ -118,11 +122,11 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
       coarse.c_max_m = config_.coarse_c_max_m;
       coarse.t_c_m = std::max(coarse.t_c_m, 0.002);
       coarse.r_c_rad = std::max(coarse.r_c_rad, 0.1 * M_PI / 180.0);
-      const IcpResult c = icp(map_, coarseSource(source), start, coarse);
+      const IcpResult c = icp(map_, coarseSource(source), start, coarse, &origin);
       coarse_iterations = c.iterations;
       if (c.converged) start = c.T_target_source;
     }
-    IcpResult icp_result = icp(map_, source, start, config_.icp);
+    IcpResult icp_result = icp(map_, source, start, config_.icp, &origin);
     icp_result.iterations += coarse_iterations;
     if (icp_result.converged && config_.refine_t_c_m > 0.0) {
       IcpConfig refine = config_.icp;
@@ -130,8 +134,17 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
       refine.t_c_m = config_.refine_t_c_m;
       refine.r_c_rad = config_.refine_r_c_rad;
       refine.max_iterations = config_.refine_max_iterations;
-      IcpResult refined = icp(map_, refineSource(source), icp_result.T_target_source, refine);
-      // Not settled within its iterations: the thesis stage's result stands.
+      IcpResult refined = icp(map_, refineSource(source), icp_result.T_target_source, refine, &origin);
+      // Not settled within its iterations, or moved farther than a bias can be: the thesis stage's
+      // result stands.
+      const Eigen::Isometry3d moved = icp_result.T_target_source.inverse() * refined.T_target_source;
+      r.refine_moved_m = moved.translation().norm();
+      r.refine_moved_rad = Eigen::AngleAxisd(moved.linear()).angle();
+      if (refined.converged &&
+          (r.refine_moved_m > config_.refine_max_correction_m || r.refine_moved_rad > config_.refine_max_correction_rad)) {
+        r.refine_rejected = true;
+        refined.converged = false;
+      }
       if (refined.converged) {
         refined.iterations += icp_result.iterations;
         icp_result = refined;
@@ -177,7 +190,8 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     info.overlap = r.overlap;
     dir_->append(info, scan_base);  // throws before the in-memory map changes: nothing half-applied
   }
-  map_.add(in_map);
+  const Eigen::Vector3f origin_map = T_map_base * sensor_origin.cast<float>();
+  map_.add(in_map, &origin_map);
   last_map_ = r.map_pose;
   last_odom_ = odom_pose;
   count_ = dir_ ? static_cast<size_t>(dir_->nextIndex()) : count_ + 1;

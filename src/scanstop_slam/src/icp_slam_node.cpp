@@ -60,6 +60,12 @@ class IcpSlamNode {
     config.refine_r_c_rad = refine_r_c_deg * M_PI / 180.0;
     optional("refine_max_iterations", config.refine_max_iterations);
     optional("refine_source_voxel", config.refine_source_voxel_m);
+    optional("refine_max_correction", config.refine_max_correction_m);
+    double refine_max_correction_deg = config.refine_max_correction_rad * 180.0 / M_PI;
+    optional("refine_max_correction_deg", refine_max_correction_deg);
+    requireInRange(pnh.resolveName("refine_max_correction_deg"), refine_max_correction_deg, 0.0, 180.0, "deg");
+    config.refine_max_correction_rad = refine_max_correction_deg * M_PI / 180.0;
+    optional("same_side", config.icp.same_side);
     optional("accelerate", config.icp.accelerate);
     optional("ignore_horizontal", config.icp.ignore_horizontal);
     optional("max_point_distance", config.max_point_distance_m);
@@ -223,6 +229,11 @@ class IcpSlamNode {
                r.map_pose.toString().c_str(), r.iterations, r.correspondences, r.rms_m * 1000, r.time_s);
     else
       ROS_WARN("icp_slam_node: scan %u: %s", r.index, res.message.c_str());
+    if (r.refine_rejected)
+      ROS_WARN("icp_slam_node: scan %u: the refinement stage moved the pose %.1f cm, %.2f deg (beyond "
+               "refine_max_correction %.1f cm, %.2f deg): kept the thesis stage's result",
+               r.index, r.refine_moved_m * 100, r.refine_moved_rad * 180 / M_PI, slam_->config().refine_max_correction_m * 100,
+               slam_->config().refine_max_correction_rad * 180 / M_PI);
 
     pose_pub_.publish(res.map_pose);
     publishTf(true);

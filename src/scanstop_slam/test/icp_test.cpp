@@ -385,6 +385,108 @@ TEST(Icp, UniqueMatchesDoNotPullAScanBackOntoTheMapsEdge) {
   EXPECT_LT(rotationError(unique.T_target_source, Eigen::Isometry3d::Identity()), 0.002);
 }
 
+/// A thin wall (faces y = 0 and y = -0.08) between a room (y > 0) and a corridor (y in [-2.2, -0.08]),
+/// x in [-3, 3], 2.5 m high, with end walls x = +-3 on both sides; 3 mm noise. Each point on one
+/// side of the wall only: room (y >= 0) or corridor (y < 0) points; near_face: the corridor's face
+/// too (else only its far wall y = -2.2 and the ends).
+std::vector<Eigen::Vector3f> thinWallPoints(std::mt19937& rng, bool room, bool near_face, int n) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> noise(0.0f, 0.003f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < n; ++i) {
+    const float a = u(rng), b = 2.5f * u(rng);
+    const int kind = i % 3;
+    if (room) {
+      if (kind == 0) pts.emplace_back(6 * a - 3, noise(rng), b);                          // room face of the wall
+      else pts.emplace_back((kind == 1 ? -3.0f : 3.0f) + noise(rng), 2 * a, b);           // end walls
+    } else {
+      if (kind == 0 && near_face && (i / 3) % 2 == 0) pts.emplace_back(6 * a - 3, -0.08f + noise(rng), b);  // corridor face
+      else if (kind == 0) pts.emplace_back(6 * a - 3, -2.2f + noise(rng), b);            // far wall
+      else pts.emplace_back((kind == 1 ? -3.0f : 3.0f) + noise(rng), -0.08f - 2.12f * a, b);  // end walls
+    }
+  }
+  return pts;
+}
+
+TEST(Icp, SameSideKeepsAScanOffTheOtherFaceOfAThinWall) {
+  // The map: a room scan (sensor at y = 2) and an earlier corridor scan that saw the far wall and
+  // the ends but not the near face. The new corridor scan (sensor at y = -1.1, at its true pose)
+  // sees the near face too, 8 cm from the room face: point-to-point ICP pairs them and pulls the
+  // scan towards the room; with the sensor origins known the pairs across the wall are no pairs.
+  std::mt19937 rng(5);
+  VoxelMap map(0.1, 30);
+  const Eigen::Vector3f room_sensor(0.0f, 2.0f, 0.45f), corridor_sensor(0.0f, -1.1f, 0.45f);
+  map.add(thinWallPoints(rng, true, false, 60000), &room_sensor);
+  map.add(thinWallPoints(rng, false, false, 60000), &corridor_sensor);
+  const std::vector<Eigen::Vector3f> scan = thinWallPoints(rng, false, true, 30000);
+  const Eigen::Vector3f origin = corridor_sensor;  // the scan's frame is the map's (true pose = identity)
+  IcpConfig c;  // 3dof, the thesis' c_max 0.1 m; tight tolerances
+  c.t_c_m = 1e-6;
+  c.r_c_rad = 1e-6;
+  c.max_iterations = 500;
+  const Eigen::Isometry3d init = pose(0.01, -0.01, 0, 0, 0, 0.2 * M_PI / 180);
+  const IcpResult side = icp(map, scan, init, c, &origin);
+  c.same_side = false;
+  const IcpResult across = icp(map, scan, init, c, &origin);
+  const IcpResult unknown = icp(map, scan, init, IcpConfig(c), nullptr);  // no origin: no side test
+  ASSERT_TRUE(side.converged) << side.failure;
+  ASSERT_TRUE(across.converged) << across.failure;
+  std::cout << "y after ICP: same side " << side.T_target_source.translation().y() << " m, across the wall "
+            << across.T_target_source.translation().y() << " m" << std::endl;
+  EXPECT_LT(side.T_target_source.translation().norm(), 0.003);
+  EXPECT_LT(rotationError(side.T_target_source, Eigen::Isometry3d::Identity()), 0.001);
+  EXPECT_GT(across.T_target_source.translation().y(), 0.01);  // pulled onto the room's face
+  EXPECT_TRUE(unknown.T_target_source.isApprox(across.T_target_source, 1e-12));
+  // The map's points keep where they were seen from; its walls have normals.
+  Eigen::Vector3f out;
+  float d2;
+  Surface s;
+  ASSERT_TRUE(map.nearest(Eigen::Vector3f(0.5f, 0.01f, 1.2f), 0.1, out, d2, nullptr, &s));
+  EXPECT_TRUE(s.planar);
+  EXPECT_GT(std::abs(s.normal.y()), 0.95f);
+  EXPECT_NEAR(s.view.dot((room_sensor - out).normalized()), 1.0f, 0.02f);
+}
+
+TEST(IcpSlam, ARefinementThatMovesTooFarIsRejected) {
+  // The refinement stage corrects centimetres; beyond refine_max_correction the thesis stage's
+  // result stands. Here the bound is below what the refinement moves on an ordinary pair.
+  std::mt19937 rng(13);
+  const std::vector<Eigen::Vector3f> world = roomPoints(rng, 60000);
+  const Pose2D second(0.4, 0.2, 0.1);
+  const auto scanAt = [&](const Pose2D& p) {
+    PointCloud scan;
+    scan.points = transformed(world, p.toIsometry3d().inverse());
+    std::normal_distribution<float> noise(0.0f, 0.005f);
+    for (auto& q : scan.points) q += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
+    scan.setUnorganized();
+    return scan;
+  };
+  const PointCloud first_scan = scanAt(Pose2D()), second_scan = scanAt(second);
+  const Pose2D odom(0.43, 0.18, 0.12);
+  const auto run = [&](const SlamConfig& config) {
+    IcpSlam slam(config);
+    slam.registerScan(first_scan, Pose2D(), Eigen::Vector3d(0, 0, 0.45));
+    return slam.registerScan(second_scan, odom, Eigen::Vector3d(0, 0, 0.45));
+  };
+  SlamConfig thesis_only;
+  thesis_only.refine_t_c_m = 0.0;
+  const Registration plain = run(thesis_only);
+  const Registration refined = run(SlamConfig());
+  SlamConfig tight;
+  tight.refine_max_correction_m = 1e-9;
+  const Registration bounded = run(tight);
+  ASSERT_TRUE(plain.converged && refined.converged && bounded.converged);
+  EXPECT_FALSE(refined.refine_rejected);
+  EXPECT_GT(refined.refine_moved_m, 1e-9);
+  EXPECT_LT(refined.refine_moved_m, SlamConfig().refine_max_correction_m);
+  EXPECT_TRUE(bounded.refine_rejected);
+  EXPECT_DOUBLE_EQ(bounded.refine_moved_m, refined.refine_moved_m);
+  EXPECT_EQ(bounded.map_pose.x, plain.map_pose.x);  // the thesis stage's result, exactly
+  EXPECT_EQ(bounded.map_pose.y, plain.map_pose.y);
+  EXPECT_EQ(bounded.map_pose.yaw, plain.map_pose.yaw);
+  EXPECT_NE(refined.map_pose.x, plain.map_pose.x);
+}
+
 TEST(Icp, FailureIsDetectedOnCloudsThatDoNotOverlap) {
   std::mt19937 rng(11);
   const std::vector<Eigen::Vector3f> src = roomPoints(rng, 3000);

@@ -23,6 +23,7 @@ void usage() {
   std::cerr << "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof]\n"
                "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
                "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
+               "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
                "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
                "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n";
 }
@@ -74,6 +75,9 @@ int main(int argc, char** argv) {
       else if (a == "--refine-r-c-deg") config.refine_r_c_rad = std::stod(next()) * M_PI / 180.0;
       else if (a == "--refine-max-iterations") config.refine_max_iterations = std::stoi(next());
       else if (a == "--refine-source-voxel") config.refine_source_voxel_m = std::stod(next());
+      else if (a == "--refine-max-correction") config.refine_max_correction_m = std::stod(next());
+      else if (a == "--refine-max-correction-deg") config.refine_max_correction_rad = std::stod(next()) * M_PI / 180.0;
+      else if (a == "--no-same-side") config.icp.same_side = false;
       else if (a == "--t-c") config.icp.t_c_m = std::stod(next());
       else if (a == "--r-c-deg") config.icp.r_c_rad = std::stod(next()) * M_PI / 180.0;
       else if (a == "--max-iterations") config.icp.max_iterations = std::stoi(next());
@@ -111,6 +115,9 @@ int main(int argc, char** argv) {
                       posErr(info.odom_pose, *truth[i]) * 100);
         std::printf("\n");
         if (!r.converged) std::printf("          %s\n", r.failure.c_str());
+        if (r.refine_rejected)
+          std::printf("          refinement moved %.1f cm, %.2f deg: rejected, the thesis stage's result stands\n",
+                      r.refine_moved_m * 100, r.refine_moved_rad * 180.0 / M_PI);
       }
       if (i < truth.size() && truth[i]) {
         err_sum += posErr(r.map_pose, *truth[i]);

@@ -15,6 +15,13 @@
 namespace scanstop {
 namespace slam {
 
+/// What VoxelMap::nearest() knows about the surface at the point it found (for IcpConfig::same_side).
+struct Surface {
+  bool planar = false;                                 ///< the point's voxel holds one plane (normal is valid)
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();    ///< that plane's unit normal (either sign)
+  Eigen::Vector3f view = Eigen::Vector3f::Zero();      ///< unit vector from the point to the sensor that saw it (zero: not known)
+};
+
 /// A voxel hash of map points for nearest-neighbour queries within a fixed radius.
 class VoxelMap {
  public:
@@ -24,13 +31,15 @@ class VoxelMap {
   /// so the map samples surfaces evenly however the scans' line patterns fall (0 = first come).
   explicit VoxelMap(double voxel_m = 0.1, int max_points_per_voxel = 30, double min_spacing_m = 0.0);
 
-  /// Adds points (map frame); non-finite points are ignored.
-  void add(const std::vector<Eigen::Vector3f>& points);
+  /// Adds points (map frame); non-finite points are ignored. sensor_origin (map frame), when
+  /// given, is where the points were seen from: each point keeps its direction (Surface::view).
+  void add(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f* sensor_origin = nullptr);
   /// Nearest stored point within radius_m of q (exact; radius_m beyond the voxel size searches more
   /// rings of voxels); false if none. horizontal (when
-  /// given) tells whether that point's voxel holds a horizontal surface (floor, ceiling, table top).
+  /// given) tells whether that point's voxel holds a horizontal surface (floor, ceiling, table top);
+  /// surface (when given) the voxel's plane and the direction the point was seen from.
   bool nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,
-               bool* horizontal = nullptr) const;
+               bool* horizontal = nullptr, Surface* surface = nullptr) const;
 
   size_t size() const { return size_; }
   double voxelSize() const { return voxel_; }
@@ -51,15 +60,26 @@ class VoxelMap {
   struct Cell {
     Key key = 0;
     std::vector<float> blocks;  ///< 3 * kLanes floats per block
+    std::vector<int8_t> views;  ///< per point: Surface::view, 3 components * 127 (zeros: not known)
     uint32_t count = 0;         ///< points stored (in the order they were added)
     bool horizontal = false;    ///< the points lie on a horizontal plane (PCA normal within 20 deg of z)
+    /// The points here and in the 6 face neighbours lie on one plane or on parallel ones (a thin
+    /// wall): the smallest PCA spread below 0.3 times the middle one; normal is its direction.
+    bool planar = false;
+    Eigen::Vector3f normal = Eigen::Vector3f::Zero();
     Eigen::Vector3f point(size_t i) const {
       const float* b = &blocks[(i / kLanes) * 3 * kLanes + i % kLanes];
       return Eigen::Vector3f(b[0], b[kLanes], b[2 * kLanes]);
     }
-    void push(const Eigen::Vector3f& p);
+    Eigen::Vector3f view(size_t i) const {
+      return Eigen::Vector3f(views[3 * i], views[3 * i + 1], views[3 * i + 2]) / 127.0f;
+    }
+    void push(const Eigen::Vector3f& p, const Eigen::Vector3f& view);
   };
   static void classify(Cell& cell);
+  /// Cell::normal and Cell::planar from the points of the cell and its 6 face neighbours.
+  void estimateNormal(Cell& cell) const;
+
   /// Open-addressing hash (linear probing, power-of-two table, at most half full) from voxel key
   /// to an index into cells_: one flat array probe per lookup instead of a node-based map's chain.
   int32_t findCell(Key k) const;
@@ -93,6 +113,11 @@ struct IcpConfig {
   /// t_c up to 1 m, towards the earlier scans). Steps become small, so it needs a tight t_c / r_c
   /// (IcpSlam's refinement stage).
   bool unique_matches = false;
+  /// With the sensor origins known (VoxelMap::add's sensor_origin, icp()'s source_origin): a pair
+  /// whose two points were seen from opposite sides of the map point's plane is no pair. The two
+  /// faces of a thin wall are otherwise one surface to ICP: room_10x8's corridor lies behind a
+  /// 10 cm wall, and the first corridor scans slid 4-6 cm onto the room side of it.
+  bool same_side = true;
   // Failure detection.
   int min_correspondences = 200;
   double min_overlap = 0.05;          ///< correspondences / source points
@@ -113,8 +138,9 @@ struct IcpResult {
 };
 
 /// Registers source points (in their own frame) to the map, starting at T_init (source -> map).
+/// source_origin: where the source points were seen from (their frame), for IcpConfig::same_side.
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
-              const IcpConfig& config);
+              const IcpConfig& config, const Eigen::Vector3f* source_origin = nullptr);
 
 /// Keeps one point per voxel (the first); voxel_m <= 0 returns the finite points unchanged.
 std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m);

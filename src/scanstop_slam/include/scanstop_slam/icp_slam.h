@@ -31,6 +31,11 @@ struct SlamConfig {
   /// source points of the refinement: one per voxel of this size (its steps are small and many, so
   /// a sparser subset keeps it cheap) [m], [0, 1]
   double refine_source_voxel_m = 0.06;
+  /// The refinement corrects a bias of a few centimetres: when it moves the thesis stage's result
+  /// farther than this, it has slid (unique matches leave weakly held directions free; room_10x8's
+  /// corridor: 80 cm and 18 deg) and the thesis stage's result stands [m], [0, 10]; [rad], [0, pi]
+  double refine_max_correction_m = 0.1;
+  double refine_max_correction_rad = 1.0 * M_PI / 180;
   double source_voxel_m = 0.02;   ///< scan points used for matching: one per voxel of this size (0 = all) [m]
   int max_points_per_voxel = 30;  ///< map points kept per c_max voxel (bounds memory and query time)
   double map_spacing_m = 0.0;     ///< a map point joins only if none of its voxel is closer [m] (0 = first come)
@@ -67,6 +72,11 @@ struct Registration {
   double rms_m = 0.0;
   double overlap = 0.0;
   double time_s = 0.0;        ///< compute time [s]
+  /// The refinement stage: how far it moved the thesis stage's result, and whether that was too far
+  /// (SlamConfig::refine_max_correction_m: the thesis stage's result stands).
+  double refine_moved_m = 0.0;
+  double refine_moved_rad = 0.0;
+  bool refine_rejected = false;
 };
 
 class IcpSlam {
@@ -88,6 +98,7 @@ class IcpSlam {
   /// Scans in the map including skipped ones: the index the next scan gets.
   size_t scanCount() const { return count_; }
   const VoxelMap& map() const { return map_; }
+  const SlamConfig& config() const { return config_; }
   const Pose2D& lastMapPose() const { return last_map_; }
   const Pose2D& lastOdomPose() const { return last_odom_; }
   /// T_map_odom: maps odometry poses into the map frame.
