@@ -75,7 +75,7 @@ bool Explorer::markUnreachable(const Eigen::Vector2d& target_map) {
   return true;
 }
 
-PlanResult Explorer::plan(const Pose2D& T_map_base) {
+PlanResult Explorer::plan(const Pose2D& T_map_base, const std::optional<Eigen::Vector2d>& goal) {
   const auto t0 = std::chrono::steady_clock::now();
   PlanInput input;
   input.states = floor_.states();
@@ -90,6 +90,8 @@ PlanResult Explorer::plan(const Pose2D& T_map_base) {
   // Did the robot reach, or at least get closer to, the target of the previous plan?
   const Eigen::Vector2d robot(T_map_base.x, T_map_base.y);
   std::string note;
+  input.goal = goal;
+  if (goal) last_.active = false;  // returning, not exploring: no attempts to count
   if (last_.active) {
     if ((robot - last_.target).norm() <= config_.target_tolerance_m) {
       last_.active = false;
@@ -110,7 +112,7 @@ PlanResult Explorer::plan(const Pose2D& T_map_base) {
   input.blacklist = blacklist_;
   choosePlan(res, input, config_.planner);
   res.message += note;
-  if (res.complete || res.target_cell.x < 0) {
+  if (res.complete || res.target_cell.x < 0 || goal) {
     last_.active = false;
   } else if (last_.active && (res.target - last_.target).norm() <= config_.blacklist_radius_m) {
     last_.target = res.target;  // the same target area again: keep counting

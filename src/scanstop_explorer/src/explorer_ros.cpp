@@ -112,6 +112,12 @@ std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, cons
         << " m from the map origin, beyond max_coordinate_m " << c.max_coordinate_m << " m";
     return out.str();
   }
+  if (req.to_goal && (!std::isfinite(req.goal.x) || !std::isfinite(req.goal.y) ||
+                      std::hypot(req.goal.x, req.goal.y) > c.max_coordinate_m)) {
+    out << "goal (" << req.goal.x << ", " << req.goal.y << ") is not finite or beyond max_coordinate_m "
+        << c.max_coordinate_m << " m from the map origin";
+    return out.str();
+  }
   if (req.unreachable.size() > static_cast<size_t>(c.max_unreachable)) {
     out << "unreachable has " << req.unreachable.size() << " points, more than max_unreachable " << c.max_unreachable;
     return out.str();
@@ -222,7 +228,9 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
   for (const geometry_msgs::Point& u : req.unreachable)
     if (explorer_->markUnreachable(Eigen::Vector2d(u.x, u.y)))
       ROS_INFO("explorer_node: target (%.2f, %.2f) blacklisted as unreachable by the caller", u.x, u.y);
-  const PlanResult r = explorer_->plan(robot);
+  const PlanResult r =
+      explorer_->plan(robot, req.to_goal ? std::optional<Eigen::Vector2d>(Eigen::Vector2d(req.goal.x, req.goal.y))
+                                         : std::nullopt);
   const ros::Time now = ros::Time::now();
   res.success = r.success;
   res.message = r.message;

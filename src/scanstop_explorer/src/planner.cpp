@@ -630,9 +630,30 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
                           " (" + std::to_string(n_reached) + " reachable cells, " +
                           std::to_string(n_black) + " blacklisted as unreachable)";
     res.message = "exploration complete";
-    return;
+    if (!in.goal) return;
   }
-  res.target_cell = argmaxCell(res.evaluation, (res.knowledge < cfg.knowledge_threshold) | (res.open != 0));
+  if (in.goal) {
+    // The reached, not blacklisted cell nearest to the goal (first in raster order on ties).
+    const cv::Point goal_cell = g.cellOf(in.goal->x(), in.goal->y());
+    const cv::Mat allowed = reached & (res.blacklist == 0);
+    double best = std::numeric_limits<double>::infinity();
+    for (int r = 0; r < allowed.rows; ++r)
+      for (int c = 0; c < allowed.cols; ++c) {
+        if (!allowed.at<uint8_t>(r, c)) continue;
+        const double d2 = std::pow(c - goal_cell.x, 2) + std::pow(r - goal_cell.y, 2);
+        if (d2 < best) {
+          best = d2;
+          res.target_cell = cv::Point(c, r);
+        }
+      }
+    if (res.target_cell.x < 0) {
+      res.success = false;
+      res.message = "no reachable cell to go to near the goal (" + fmt(in.goal->x()) + ", " + fmt(in.goal->y()) + ")";
+      return;
+    }
+  } else {
+    res.target_cell = argmaxCell(res.evaluation, (res.knowledge < cfg.knowledge_threshold) | (res.open != 0));
+  }
   if (res.target_cell.x < 0) {
     res.complete = true;
     res.complete_reason = "every reachable cell that lacks knowledge is blacklisted as unreachable (" +
@@ -640,7 +661,7 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     res.message = "exploration complete";
     return;
   }
-  res.complete_reason.clear();
+  if (!res.complete) res.complete_reason.clear();
   res.score = res.evaluation.at<float>(res.target_cell);
   res.target_cost_m = res.cost_map.cost.at<float>(res.target_cell) * res_m;
   res.target = g.center(res.target_cell);
@@ -657,7 +678,8 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     res.scan_at.push_back(i > 0);  // every intermediate landmark and the target
   }
   timer.lap("path");
-  res.message = "target (" + fmt(res.target.x()) + ", " + fmt(res.target.y()) + ") m, " +
+  res.message = std::string(in.goal ? (res.complete ? "exploration complete; " : "") + std::string("to the goal: ") : "") +
+                "target (" + fmt(res.target.x()) + ", " + fmt(res.target.y()) + ") m, " +
                 std::to_string(res.path.size()) + " waypoints, " + fmt(res.target_cost_m) + " m, b = " +
                 fmt(res.score, 4) + ", " + std::to_string(res.open_cells) + " open cells";
 }

@@ -55,6 +55,18 @@ TEST(PlanRequestProblem, NonFinitePose) {
   EXPECT_TRUE(has(problem(req), "map_pose.orientation")) << problem(req);
 }
 
+TEST(PlanRequestProblem, BadGoalOnlyWhenAsked) {
+  auto req = goodRequest();
+  req.goal.x = kNaN;
+  EXPECT_EQ(problem(req), "");  // to_goal false: the goal is not used
+  req.to_goal = true;
+  EXPECT_TRUE(has(problem(req), "goal (nan, 0) is not finite")) << problem(req);
+  req.goal.x = 1e9;
+  EXPECT_TRUE(has(problem(req), "beyond max_coordinate_m")) << problem(req);
+  req.goal.x = 2.0;
+  EXPECT_EQ(problem(req), "");
+}
+
 TEST(PlanRequestProblem, NonUnitQuaternion) {
   auto req = goodRequest();
   req.map_pose.pose.orientation.w = 3.0;

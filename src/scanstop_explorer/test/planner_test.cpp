@@ -213,6 +213,41 @@ TEST(Plan, RobotOffTheAccessibleFloorIsJoinedOrRejected) {
   EXPECT_FALSE(planStep(empty, cfg).success);
 }
 
+TEST(Plan, AGoalGivesThePathToTheNearestReachedCellAlsoWhenComplete) {
+  // The whole two-room floor seen (no frontier: complete); the robot in the far room asks for the
+  // way back to its start.
+  PlannerConfig cfg;
+  const test::Scene s = test::twoRooms();
+  const cv::Mat states = test::idealStates(s);
+  const Eigen::Vector2d start(1.0, 1.0);
+  PlanInput in = inputFor(s, states, {start}, Pose2D(1.0, 1.0, 0.0));
+  in.robot = Pose2D(7.0, 3.0, 0.0);  // far room, the door between them is at y in [1.5, 2.5]
+  ASSERT_TRUE(planStep(in, cfg).complete);
+  ASSERT_TRUE(planStep(in, cfg).path.empty());
+  in.goal = start;
+  const PlanResult back = planStep(in, cfg);
+  ASSERT_TRUE(back.success) << back.message;
+  EXPECT_TRUE(back.complete);
+  EXPECT_FALSE(back.complete_reason.empty());
+  ASSERT_GE(back.path.size(), 2u);
+  EXPECT_TRUE(test::polylineOnAccessible(back.geometry, back.accessible, back.path, 0));
+  for (size_t i = 1; i < back.path.size(); ++i) EXPECT_LE((back.path[i] - back.path[i - 1]).norm(), cfg.d_max_m + 1e-6);
+  EXPECT_TRUE(back.scan_at.back());
+  EXPECT_LT((back.target - start).norm(), s.geometry.resolution);  // the start is reached floor
+  double len = 0.0;
+  for (size_t i = 1; i < back.path.size(); ++i) len += (back.path[i] - back.path[i - 1]).norm();
+  EXPECT_NEAR(len, back.target_cost_m, 1e-3);
+  // A goal inside a wall or off the map: the nearest reached cell; one blacklisted: the next one.
+  in.goal = Eigen::Vector2d(-50.0, 1.0);
+  const PlanResult off = planStep(in, cfg);
+  ASSERT_TRUE(off.success) << off.message;
+  EXPECT_TRUE(std::isfinite(off.cost_map.cost.at<float>(off.target_cell)));
+  in.blacklist.emplace_back(off.target, 0.3);
+  const PlanResult next = planStep(in, cfg);
+  ASSERT_TRUE(next.success) << next.message;
+  EXPECT_GT((next.target - off.target).norm(), 0.3);
+}
+
 TEST(Termination, FiresOnAFullySeenRoomAndNotBefore) {
   PlannerConfig cfg;
   const test::Scene s = test::twoRooms();

@@ -34,6 +34,8 @@ void MissionConfig::validate() const {
   requireInRange("max_scans", max_scans, 0, 100000);
   requireInRange("d_max", d_max_m, 0.05, 10.0, "m");
   requireInRange("min_scan_travel", min_scan_travel_m, 0.0, 100.0, "m");
+  requireInRange("home_tolerance", home_tolerance_m, 0.01, 100.0, "m");
+  requireInRange("home_scan_travel", home_scan_travel_m, 0.0, 100.0, "m");
   requireInRange("waypoint_tolerance", waypoint_tolerance_m, 0.0, 1.0, "m");
   requireInRange("heading_tolerance", heading_tolerance_rad, 0.0, 0.5, "rad");
   requireInRange("max_step_retries", max_step_retries, 0, 100);
@@ -411,6 +413,14 @@ State Mission::run() {
                           : finish(State::Aborted, "aborted by the user");
 
   int failed_cycles = 0;
+  int home_plans = 0;  // plans of the way back to the start (bounded: the start may have become unreachable)
+  const auto homeOf = [](const MissionState& s) {
+    return Eigen::Vector2d(s.scans.front().map_pose.x, s.scans.front().map_pose.y);
+  };
+  const auto atHome = [&](const MissionState& s) {
+    const Pose2D p = s.estimate();
+    return (Eigen::Vector2d(p.x, p.y) - homeOf(s)).norm() <= config_.home_tolerance_m;
+  };
   for (int cycle = 0; cycle < config_.max_cycles; ++cycle) {
     if (!checkControl()) return finish(State::Aborted, "aborted by the user");
     if (failed_cycles >= config_.max_consecutive_failed_cycles)
@@ -431,13 +441,32 @@ State Mission::run() {
       event("driving on along the saved path to (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) +
             ") from waypoint " + std::to_string(first + 1) + " of " + std::to_string(plan.waypoints.size()));
     } else {
+      // Exploration complete and return_home: plan the way back to the start, until there.
+      const bool homeward = config_.return_home && now.complete;
+      if (homeward && atHome(now)) {
+        event("back at the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) + "), " +
+              fmt((Eigen::Vector2d(now.estimate().x, now.estimate().y) - homeOf(now)).norm()) + " m from it");
+        break;
+      }
+      if (homeward && home_plans >= 3) {
+        event("did not get back to the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) + ") in " +
+                  std::to_string(home_plans) + " plans; the mission ends here",
+              true);
+        break;
+      }
       // Plan.
       setState(State::Planning);
+      const std::optional<Eigen::Vector2d> goal = homeward ? std::optional<Eigen::Vector2d>(homeOf(now)) : std::nullopt;
+      if (homeward) ++home_plans;
       for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
         backoff(attempt);
-        plan = robot_.planNext(now.estimate(), now.unreachable);
+        plan = robot_.planNext(now.estimate(), now.unreachable, goal);
         if (plan.success) break;
         event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
+      }
+      if (!plan.success && homeward) {
+        event("no way back to the start: " + plan.message + "; the mission ends here", true);
+        break;
       }
       if (!plan.success) return finish(State::Failed, "the explorer could not plan: " + plan.message);
       pending_plan_wall_s_ += plan.wall_time_s;
@@ -453,7 +482,13 @@ State Mission::run() {
         state_.complete = true;
         state_.complete_reason = plan.complete_reason;
       }
-      if (plan.complete) break;
+      if (plan.complete && !homeward) {
+        if (!config_.return_home || atHome(snapshot())) break;
+        save();
+        event("exploration complete; returning to the start (" + fmt(homeOf(now).x()) + ", " +
+              fmt(homeOf(now).y()) + ")");
+        continue;  // the next cycle plans the way back
+      }
       if (budgetReached()) {
         std::lock_guard<std::mutex> lock(mutex_);
         state_.complete_reason = "scan budget of " + std::to_string(config_.max_scans) + " scans reached";
@@ -464,7 +499,8 @@ State Mission::run() {
         event("the explorer returned an empty path without completing; replanning", true);
         continue;
       }
-      info_("plan " + std::to_string(now.plans + 1) + ": target (" + fmt(plan.target.x()) + ", " +
+      info_("plan " + std::to_string(now.plans + 1) + (homeward ? " (the way back)" : "") + ": target (" +
+            fmt(plan.target.x()) + ", " +
             fmt(plan.target.y()) + "), " + std::to_string(plan.waypoints.size()) + " waypoints, score " +
             fmt(plan.score, 4) + ", coverage " + fmt(plan.coverage * 100.0, 1) + " %");
     }
@@ -490,6 +526,9 @@ State Mission::run() {
     const size_t scans_before = snapshot().scans.size();
     bool replan = false;
     double travel = 0.0;  // planned path length since the last scan [m]
+    const double scan_travel = config_.return_home && snapshot().complete
+                                   ? std::max(config_.min_scan_travel_m, config_.home_scan_travel_m)
+                                   : config_.min_scan_travel_m;
     Eigen::Vector2d from(now.estimate().x, now.estimate().y);
     for (size_t i = first; i < plan.waypoints.size() && !replan; ++i) {
       travel += (plan.waypoints[i] - from).norm();
@@ -513,7 +552,7 @@ State Mission::run() {
       }
       const bool last = i + 1 == plan.waypoints.size();
       const bool landmark = i < plan.scan_at.size() && plan.scan_at[i];
-      const bool scan_here = last || (landmark && travel >= config_.min_scan_travel_m);
+      const bool scan_here = last || (landmark && travel >= scan_travel);
       if (scan_here) {
         travel = 0.0;
         setPath(i, static_cast<int>(snapshot().scans.size()));

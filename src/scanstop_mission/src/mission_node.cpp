@@ -46,6 +46,9 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "waypoint_tolerance", config_.waypoint_tolerance_m);
   ros_params::optional(pnh, "heading_tolerance", config_.heading_tolerance_rad);
   ros_params::optional(pnh, "min_scan_travel", config_.min_scan_travel_m);
+  ros_params::optional(pnh, "return_home", config_.return_home);
+  ros_params::optional(pnh, "home_tolerance", config_.home_tolerance_m);
+  ros_params::optional(pnh, "home_scan_travel", config_.home_scan_travel_m);
   ros_params::optional(pnh, "max_step_retries", config_.max_step_retries);
   ros_params::optional(pnh, "retry_backoff", config_.retry_backoff_s);
   ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
@@ -91,7 +94,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   // A misspelt parameter would silently keep its default: refuse it.
   const std::vector<std::string> unknown = ros_params::unknownParameters(
       pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
-            "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
+            "return_home", "home_tolerance", "home_scan_travel", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
             "robot_radius", "explorer_ns"});
@@ -99,7 +102,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     std::string names;
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
     throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
-                      "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, max_step_retries, "
+                      "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, return_home, home_tolerance, home_scan_travel, "
+                      "max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
                       "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns");
   }

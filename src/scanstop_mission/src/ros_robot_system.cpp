@@ -207,7 +207,8 @@ MotionResult RosRobotSystem::forward(double distance_m) {
   return r;
 }
 
-PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable) {
+PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
+                                    const std::optional<Eigen::Vector2d>& goal) {
   PlanResult r;
   scanstop_msgs::PlanNext srv;
   srv.request.map_pose = ros_conv::toPoseStamped(map_pose, "map", ros::Time::now());
@@ -216,6 +217,11 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
     p.x = u.x();
     p.y = u.y();
     srv.request.unreachable.push_back(p);
+  }
+  if (goal) {
+    srv.request.to_goal = true;
+    srv.request.goal.x = goal->x();
+    srv.request.goal.y = goal->y();
   }
   if (!mesher_seen_ && build_mesh_.exists()) mesher_seen_ = true;  // a mesher runs: wait for it at the end
   if (!callWithTimeout(plan_next_, srv, timeouts_.wait_for_service_s, timeouts_.plan_s, r.message, r.wall_time_s))

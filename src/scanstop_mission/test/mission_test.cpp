@@ -54,6 +54,7 @@ class FakeSystem : public RobotSystem {
   // Explorer
   std::vector<Eigen::Vector2d> targets;
   std::vector<bool> visited;
+  std::vector<Eigen::Vector2d> goals;  ///< goals of the plans asked for with one (the way back)
   int plan_failures_left = 0;
   bool always_fail_plan = false;
   bool insert_intermediate = false;               // add a mid-point landmark with scan_at = true
@@ -139,7 +140,8 @@ class FakeSystem : public RobotSystem {
     return r;
   }
 
-  PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable) override {
+  PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
+                      const std::optional<Eigen::Vector2d>& goal) override {
     PlanResult r;
     if (always_fail_plan || plan_failures_left > 0) {
       --plan_failures_left;
@@ -157,6 +159,15 @@ class FakeSystem : public RobotSystem {
     size_t done = 0;
     for (bool v : visited) done += v ? 1 : 0;
     r.coverage = targets.empty() ? 1.0 : static_cast<double>(done) / targets.size();
+    if (goal) {  // straight to the goal; completeness as always
+      goals.push_back(*goal);
+      r.complete = done == targets.size();
+      if (r.complete) r.complete_reason = "no reachable cell borders unknown space";
+      r.target = *goal;
+      r.waypoints.push_back(*goal);
+      r.scan_at.push_back(true);
+      return r;
+    }
     for (size_t i = 0; i < targets.size(); ++i) {
       if (visited[i]) continue;
       r.target = targets[i];
@@ -206,6 +217,7 @@ MissionConfig config(const std::string& dir) {
   c.planes = 50;
   c.world = "fake_room";
   c.retry_backoff_s = 0.01;
+  c.return_home = false;  // the tests below count the exploring scans; ReturnsHome... turns it on
   return c;
 }
 
@@ -232,6 +244,34 @@ TEST(Mission, ExploresEveryTargetAndEndsComplete) {
   EXPECT_EQ(saved.scans.size(), 4u);
   EXPECT_EQ(saved.complete_reason, "no reachable cell borders unknown space");
   EXPECT_TRUE(std::ifstream(m.logPath()).good());
+}
+
+TEST(Mission, ReturnsToTheStartOnceExplorationIsComplete) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
+  MissionConfig c = config(dir.path());
+  c.return_home = true;
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  EXPECT_TRUE(s.complete);
+  ASSERT_EQ(s.scans.size(), 4u);  // start, two targets, back at the start
+  ASSERT_EQ(sys.goals.size(), 1u);  // one plan of the way back, to the first scan's position
+  EXPECT_LT(sys.goals[0].norm(), 1e-9);
+  // Driven there (the fake's odometry turns 1 deg per metre: the 4.2 m leg home ends ~0.2 m off)
+  // and scanned; SLAM's pose of that scan is home.
+  EXPECT_LT(Eigen::Vector2d(s.scans.back().true_pose->x, s.scans.back().true_pose->y).norm(), 0.3);
+  EXPECT_LT(Eigen::Vector2d(s.scans.back().map_pose.x, s.scans.back().map_pose.y).norm(), c.home_tolerance_m);
+  EXPECT_EQ(s.complete_reason, "no reachable cell borders unknown space");
+  // A mission resumed after it ended there does not drive again.
+  FakeSystem again = sys;
+  again.goals.clear();
+  Mission resumed(c, again, quiet, quiet);
+  resumed.loadSavedState();
+  EXPECT_EQ(resumed.run(), State::Done);
+  EXPECT_TRUE(again.goals.empty());
+  EXPECT_EQ(resumed.snapshot().scans.size(), 4u);
 }
 
 TEST(Mission, StraightMotionsNeverExceedDMax) {

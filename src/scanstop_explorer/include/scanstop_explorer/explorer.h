@@ -51,7 +51,9 @@ class Explorer {
 
   /// One planning step from the robot's map-frame pose; updates the blacklist (a target planned
   /// before that the robot neither reached nor got closer to max_failed_attempts times).
-  PlanResult plan(const Pose2D& T_map_base);
+  /// With a goal: the path to the reached cell nearest to it instead of a new scan location
+  /// (PlanInput::goal; it does not count as an attempt at the previous target).
+  PlanResult plan(const Pose2D& T_map_base, const std::optional<Eigen::Vector2d>& goal = std::nullopt);
 
   /// Grows the floor grid to hold the map-frame box [lo, hi] [m] (plus the margin) before any scan
   /// reaches it, e.g. a known building outline; cells stay unknown.

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -152,6 +153,10 @@ struct PlanInput {
   std::vector<Eigen::Vector2d> scan_positions;  ///< map-frame positions of all past scans [m]
   Pose2D robot;                                 ///< current robot pose (map frame)
   std::vector<std::pair<Eigen::Vector2d, double>> blacklist;  ///< discs (centre [m], radius [m]) never chosen again
+  /// Given: no new scan location; the target is the reached, not blacklisted cell nearest to this
+  /// point [m] (e.g. the start, once exploration is complete), the path as usual. Termination and
+  /// coverage are evaluated as always.
+  std::optional<Eigen::Vector2d> goal;
 };
 
 /// Everything a planning step computed (all grids share `geometry`).
@@ -192,7 +197,7 @@ PlanResult computeMaps(const PlanInput& input, const PlannerConfig& config);
 /// The target is the argmax of b among the reached cells that lack knowledge (k <
 /// knowledge_threshold; Algorithm 5 line 10: "low knowledge and low cost") or are open (next to an
 /// occluded frontier): so every scan removes candidates and the robot never dithers between
-/// already scanned spots.
+/// already scanned spots. With input.goal the target is the reached cell nearest to it instead.
 void choosePlan(PlanResult& result, const PlanInput& input, const PlannerConfig& config);
 /// computeMaps + choosePlan.
 PlanResult planStep(const PlanInput& input, const PlannerConfig& config);

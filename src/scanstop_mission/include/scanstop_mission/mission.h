@@ -1,8 +1,8 @@
 #pragma once
 /// The scan-stop cycle (thesis chapters 1, 5.5, 8): scan -> register -> plan -> drive the path
 /// (rotate, then straight segments of at most d_max; scan and register at intermediate landmarks)
-/// -> repeat until the explorer reports exploration complete, the scan budget is reached or the user
-/// aborts. ROS-free: the steps go through a RobotSystem; the state is saved after every step.
+/// -> repeat until the explorer reports exploration complete (then, with return_home, drive back to
+/// the start), the scan budget is reached or the user aborts. ROS-free: the steps go through a RobotSystem; the state is saved after every step.
 
 #include <atomic>
 #include <chrono>
@@ -28,6 +28,15 @@ struct MissionConfig {
   /// at least this long [m]; 0 = at every landmark the explorer marks (the thesis). The target is
   /// always scanned.
   double min_scan_travel_m = 0.0;
+  /// Once exploration is complete, drive back to the first scan's position (scanning on the way as
+  /// on any path, and at the end) before the mission ends: the robot comes back, and its last
+  /// scan registers against the well-mapped start instead of the far end of a corridor.
+  bool return_home = true;
+  double home_tolerance_m = 0.5;         ///< within this of the first scan's position the robot is back [m]
+  /// On the way back, scans at intermediate landmarks only once the path driven since the last scan
+  /// is at least this long [m] (min_scan_travel_m when smaller): the way leads over mapped ground,
+  /// the scans there only hold the pose.
+  double home_scan_travel_m = 3.0;
   int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
   /// Wait before retry n (n = 1, 2, ...) of a failed step: n times this [s]. A node that died
   /// mid-call is usually back (respawn) within a few seconds.

@@ -73,7 +73,10 @@ class RobotSystem {
   virtual RegisterResult registerScan(const ScanResult& scan) = 0;
   virtual MotionResult rotate(double angle_rad) = 0;
   virtual MotionResult forward(double distance_m) = 0;
-  virtual PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable) = 0;
+  /// The next scan location and the path to it; with a goal, the path to the reachable cell nearest
+  /// to the goal instead (PlanResult::complete still says whether exploration is complete).
+  virtual PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
+                              const std::optional<Eigen::Vector2d>& goal) = 0;
   virtual MeshResult buildMesh(const std::string& output_path) = 0;
   /// The true pose in the map frame (simulation only), for the report; nullopt on a real robot.
   virtual std::optional<Pose2D> groundTruth() = 0;
