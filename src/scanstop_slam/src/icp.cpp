@@ -194,13 +194,7 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
   bool found = false;
   static_assert(kLanes % 4 == 0, "a block row is whole SSE registers");
   const Quad qx = SCANSTOP_SPLAT4(q.x()), qy = SCANSTOP_SPLAT4(q.y()), qz = SCANSTOP_SPLAT4(q.z());
-  const auto scan = [&](int dx, int dy, int dz) {
-    const int d[3] = {dx, dy, dz};
-    float box2 = 0.0f;
-    for (int a = 0; a < 3; ++a) {
-      const float g = d[a] < 0 ? lo[a] + (-d[a] - 1) * vs : (d[a] > 0 ? hi[a] + (d[a] - 1) * vs : 0.0f);
-      box2 += g * g;
-    }
+  const auto scan = [&](int dx, int dy, int dz, float box2) {
     if (box2 >= best) return;
     const int32_t c = findCell(key(x + dx, y + dy, z + dz));
     if (c < 0) return;
@@ -258,21 +252,45 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
       }
     }
   };
-  scan(0, 0, 0);
+  scan(0, 0, 0, 0.0f);
   // Shells of neighbour voxels out to the radius (one shell when radius <= voxel), nearest shell
   // first: every voxel of shell k is at least (k - 1) voxels plus q's smallest offset to a face of
   // its own voxel away, so once the best point is closer than that no farther shell can hold a
   // closer one (exact, and a small voxel with a large radius costs what the points near q cost).
   const int rings = std::max(1, static_cast<int>(std::ceil(radius_m / voxel_ - 1e-9)));
   const float face = std::min({lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]});
+  // Squared gaps between q and the voxel d along each axis (d = -rings..rings), computed once per
+  // query instead of per voxel; a voxel's box distance is (gx^2 + gy^2) + gz^2 as a sum in axis
+  // order, so a row of voxels whose partial sum is already at best is skipped whole.
+  constexpr int kSmallWidth = 17;  // up to 8 rings on the stack
+  float gap2_small[3 * kSmallWidth];
+  std::vector<float> gap2_large;
+  const int width = 2 * rings + 1;
+  float* gap2 = gap2_small;
+  if (width > kSmallWidth) {
+    gap2_large.resize(3 * width);
+    gap2 = gap2_large.data();
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int d = -rings; d <= rings; ++d) {
+      const float g = d < 0 ? lo[a] + (-d - 1) * vs : (d > 0 ? hi[a] + (d - 1) * vs : 0.0f);
+      gap2[a * width + d + rings] = g * g;
+    }
+  const float* gx2 = gap2 + rings;
+  const float* gy2 = gap2 + width + rings;
+  const float* gz2 = gap2 + 2 * width + rings;
   for (int k = 1; k <= rings; ++k) {
     const float shell = (k - 1) * vs + face;
     if (shell * shell >= best) break;
-    for (int dx = -k; dx <= k; ++dx)
+    for (int dx = -k; dx <= k; ++dx) {
+      if (gx2[dx] >= best) continue;
       for (int dy = -k; dy <= k; ++dy) {
+        const float bxy = gx2[dx] + gy2[dy];
+        if (bxy >= best) continue;
         const bool side = dx == -k || dx == k || dy == -k || dy == k;
-        for (int dz = -k; dz <= k; dz += side ? 1 : 2 * k) scan(dx, dy, dz);  // the shell's surface only
+        for (int dz = -k; dz <= k; dz += side ? 1 : 2 * k) scan(dx, dy, dz, bxy + gz2[dz]);  // the shell's surface only
       }
+    }
   }
   dist2 = best;
   return found;
