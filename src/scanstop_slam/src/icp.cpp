@@ -41,10 +41,10 @@ inline uint64_t mixKey(uint64_t k) {
 }
 }  // namespace
 
-int32_t VoxelMap::findCell(Key k) const {
+int32_t VoxelMap::findBrick(Key k) const {
   if (slot_keys_.empty()) return -1;
   for (size_t i = mixKey(static_cast<uint64_t>(k)) & slot_mask_;; i = (i + 1) & slot_mask_) {
-    const int32_t c = slot_cells_[i];
+    const int32_t c = slot_bricks_[i];
     if (c < 0) return -1;
     if (slot_keys_[i] == k) return c;
   }
@@ -53,28 +53,48 @@ int32_t VoxelMap::findCell(Key k) const {
 void VoxelMap::growTable() {
   const size_t capacity = slot_keys_.empty() ? 1024 : slot_keys_.size() * 2;
   slot_keys_.assign(capacity, 0);
-  slot_cells_.assign(capacity, -1);
+  slot_bricks_.assign(capacity, -1);
   slot_mask_ = capacity - 1;
-  for (size_t c = 0; c < cells_.size(); ++c) {
-    size_t i = mixKey(static_cast<uint64_t>(cells_[c].key)) & slot_mask_;
-    while (slot_cells_[i] >= 0) i = (i + 1) & slot_mask_;
-    slot_keys_[i] = cells_[c].key;
-    slot_cells_[i] = static_cast<int32_t>(c);
+  for (size_t b = 0; b < bricks_.size(); ++b) {
+    size_t i = mixKey(static_cast<uint64_t>(bricks_[b].key)) & slot_mask_;
+    while (slot_bricks_[i] >= 0) i = (i + 1) & slot_mask_;
+    slot_keys_[i] = bricks_[b].key;
+    slot_bricks_[i] = static_cast<int32_t>(b);
   }
 }
 
-int32_t VoxelMap::findOrAddCell(Key k) {
-  if (2 * (cells_.size() + 1) > slot_keys_.size()) growTable();
+int32_t VoxelMap::findCell(int x, int y, int z) const {
+  const int32_t b = findBrick(key(x >> 2, y >> 2, z >> 2));
+  if (b < 0) return -1;
+  const Brick& brick = bricks_[b];
+  const int bit = brickBit(x, y, z);
+  return brick.occupied >> bit & 1 ? brick.cells[bit] : -1;
+}
+
+int32_t VoxelMap::findOrAddCell(int x, int y, int z) {
+  const Key k = key(x >> 2, y >> 2, z >> 2);  // arithmetic shift: floor division by 4
+  if (2 * (bricks_.size() + 1) > slot_keys_.size()) growTable();
   size_t i = mixKey(static_cast<uint64_t>(k)) & slot_mask_;
-  for (; slot_cells_[i] >= 0; i = (i + 1) & slot_mask_)
-    if (slot_keys_[i] == k) return slot_cells_[i];
+  for (; slot_bricks_[i] >= 0; i = (i + 1) & slot_mask_)
+    if (slot_keys_[i] == k) break;
+  if (slot_bricks_[i] < 0) {
+    if (bricks_.size() >= static_cast<size_t>(std::numeric_limits<int32_t>::max()))
+      throw std::length_error("VoxelMap: more than 2^31 bricks");
+    slot_keys_[i] = k;
+    slot_bricks_[i] = static_cast<int32_t>(bricks_.size());
+    bricks_.emplace_back();
+    bricks_.back().key = k;
+  }
+  Brick& brick = bricks_[slot_bricks_[i]];
+  const int bit = brickBit(x, y, z);
+  if (brick.occupied >> bit & 1) return brick.cells[bit];
   if (cells_.size() >= static_cast<size_t>(std::numeric_limits<int32_t>::max()))
     throw std::length_error("VoxelMap: more than 2^31 voxels");
-  slot_keys_[i] = k;
-  slot_cells_[i] = static_cast<int32_t>(cells_.size());
+  brick.occupied |= uint64_t{1} << bit;
+  brick.cells[bit] = static_cast<int32_t>(cells_.size());
   cells_.emplace_back();
-  cells_.back().key = k;
-  return slot_cells_[i];
+  cells_.back().key = key(x, y, z);
+  return brick.cells[bit];
 }
 
 VoxelMap::Key VoxelMap::key(int x, int y, int z) const {
@@ -124,7 +144,7 @@ void VoxelMap::estimateNormal(Cell& cell) const {
   Eigen::Matrix3d sum2 = Eigen::Matrix3d::Zero();
   size_t n = 0;
   for (const auto& o : kOffsets) {
-    const int32_t c = findCell(key(x + o[0], y + o[1], z + o[2]));
+    const int32_t c = findCell(x + o[0], y + o[1], z + o[2]);
     if (c < 0) continue;
     const Cell& other = cells_[c];
     for (size_t i = 0; i < other.count; ++i) {
@@ -150,7 +170,7 @@ void VoxelMap::add(const std::vector<Eigen::Vector3f>& points, const Eigen::Vect
     const int x = static_cast<int>(std::floor(p.x() / voxel_));
     const int y = static_cast<int>(std::floor(p.y() / voxel_));
     const int z = static_cast<int>(std::floor(p.z() / voxel_));
-    const int32_t c = findOrAddCell(key(x, y, z));
+    const int32_t c = findOrAddCell(x, y, z);
     Cell& cell = cells_[c];
     if (cell.count >= static_cast<uint32_t>(max_per_voxel_)) continue;
     if (min_spacing2_ > 0.0f) {
@@ -194,16 +214,21 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
   bool found = false;
   static_assert(kLanes % 4 == 0, "a block row is whole SSE registers");
   const Quad qx = SCANSTOP_SPLAT4(q.x()), qy = SCANSTOP_SPLAT4(q.y()), qz = SCANSTOP_SPLAT4(q.z());
-  const auto scan = [&](int dx, int dy, int dz) {
-    const int d[3] = {dx, dy, dz};
-    float box2 = 0.0f;
-    for (int a = 0; a < 3; ++a) {
-      const float g = d[a] < 0 ? lo[a] + (-d[a] - 1) * vs : (d[a] > 0 ? hi[a] + (d[a] - 1) * vs : 0.0f);
-      box2 += g * g;
-    }
+  const Brick* brick = nullptr;  // the brick of the last voxel looked up (nullptr: none there)
+  Key brick_key = -1;            // its key (-1: no lookup yet; keys are >= 0)
+  const auto scan = [&](int dx, int dy, int dz, float box2) {
     if (box2 >= best) return;
-    const int32_t c = findCell(key(x + dx, y + dy, z + dz));
-    if (c < 0) return;
+    const int vx = x + dx, vy = y + dy, vz = z + dz;
+    const Key bk = key(vx >> 2, vy >> 2, vz >> 2);
+    if (bk != brick_key) {
+      brick_key = bk;
+      const int32_t b = findBrick(bk);
+      brick = b < 0 ? nullptr : &bricks_[b];
+    }
+    if (!brick) return;
+    const int bit = brickBit(vx, vy, vz);
+    if (!(brick->occupied >> bit & 1)) return;
+    const int32_t c = brick->cells[bit];
     const Cell& cell = cells_[c];
     const float* blocks = cell.blocks.data();
     const size_t n_blocks = cell.blocks.size() / (3 * kLanes);
@@ -258,21 +283,45 @@ bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3
       }
     }
   };
-  scan(0, 0, 0);
+  scan(0, 0, 0, 0.0f);
   // Shells of neighbour voxels out to the radius (one shell when radius <= voxel), nearest shell
   // first: every voxel of shell k is at least (k - 1) voxels plus q's smallest offset to a face of
   // its own voxel away, so once the best point is closer than that no farther shell can hold a
   // closer one (exact, and a small voxel with a large radius costs what the points near q cost).
   const int rings = std::max(1, static_cast<int>(std::ceil(radius_m / voxel_ - 1e-9)));
   const float face = std::min({lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]});
+  // Squared gaps between q and the voxel d along each axis (d = -rings..rings), computed once per
+  // query instead of per voxel; a voxel's box distance is (gx^2 + gy^2) + gz^2 as a sum in axis
+  // order, so a row of voxels whose partial sum is already at best is skipped whole.
+  constexpr int kSmallWidth = 17;  // up to 8 rings on the stack
+  float gap2_small[3 * kSmallWidth];
+  std::vector<float> gap2_large;
+  const int width = 2 * rings + 1;
+  float* gap2 = gap2_small;
+  if (width > kSmallWidth) {
+    gap2_large.resize(3 * width);
+    gap2 = gap2_large.data();
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int d = -rings; d <= rings; ++d) {
+      const float g = d < 0 ? lo[a] + (-d - 1) * vs : (d > 0 ? hi[a] + (d - 1) * vs : 0.0f);
+      gap2[a * width + d + rings] = g * g;
+    }
+  const float* gx2 = gap2 + rings;
+  const float* gy2 = gap2 + width + rings;
+  const float* gz2 = gap2 + 2 * width + rings;
   for (int k = 1; k <= rings; ++k) {
     const float shell = (k - 1) * vs + face;
     if (shell * shell >= best) break;
-    for (int dx = -k; dx <= k; ++dx)
+    for (int dx = -k; dx <= k; ++dx) {
+      if (gx2[dx] >= best) continue;
       for (int dy = -k; dy <= k; ++dy) {
+        const float bxy = gx2[dx] + gy2[dy];
+        if (bxy >= best) continue;
         const bool side = dx == -k || dx == k || dy == -k || dy == k;
-        for (int dz = -k; dz <= k; dz += side ? 1 : 2 * k) scan(dx, dy, dz);  // the shell's surface only
+        for (int dz = -k; dz <= k; dz += side ? 1 : 2 * k) scan(dx, dy, dz, bxy + gz2[dz]);  // the shell's surface only
       }
+    }
   }
   dist2 = best;
   return found;

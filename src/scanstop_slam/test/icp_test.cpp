@@ -196,6 +196,43 @@ TEST(VoxelMap, NearestIsExactForRadiiUpToSeveralVoxels) {
   EXPECT_GT(found_count, 1000);  // the radii both find and miss
 }
 
+TEST(VoxelMap, NearestIsExactAcrossBricksOnBothSidesOfZero) {
+  // The voxels are looked up through bricks of 4x4x4 voxels (floor division of negative voxel
+  // coordinates, neighbours in the next brick): clusters around a corner where x, y and z change
+  // sign, and the same far from the origin, must give what a scan of every point gives.
+  for (const Eigen::Vector3f& offset : {Eigen::Vector3f(0.0f, 0.0f, 0.0f), Eigen::Vector3f(-803.05f, 412.2f, -31.0f)}) {
+    std::mt19937 rng(19);
+    std::vector<Eigen::Vector3f> pts = clusteredPoints(rng, 0.6f, 0.05f, 30, 30);
+    for (auto& p : pts) p += offset;
+    std::uniform_real_distribution<float> u(-0.7f, 0.7f);  // queries
+    VoxelMap map(0.1, 1000);
+    map.add(pts);
+    int found_count = 0;
+    for (double radius : {0.07, 0.1, 0.35}) {
+      for (int q = 0; q < 1500; ++q) {
+        const Eigen::Vector3f query = offset + Eigen::Vector3f(u(rng), u(rng), u(rng));
+        float brute = static_cast<float>(radius * radius);
+        int brute_index = -1;
+        for (size_t i = 0; i < pts.size(); ++i) {
+          const float d2 = (pts[i] - query).squaredNorm();
+          if (d2 < brute) brute = d2, brute_index = static_cast<int>(i);
+        }
+        Eigen::Vector3f out;
+        float d2 = 0.0f;
+        const bool found = map.nearest(query, radius, out, d2);
+        ASSERT_EQ(found, brute_index >= 0) << "radius " << radius << " query " << query.transpose();
+        if (found) {
+          ASSERT_EQ(out, pts[brute_index]) << "radius " << radius << " query " << query.transpose();
+          ASSERT_EQ(d2, brute);
+          ++found_count;
+        }
+      }
+    }
+    EXPECT_GT(found_count, 1000) << offset.transpose();
+    EXPECT_LT(found_count, 4400) << offset.transpose();  // and miss
+  }
+}
+
 TEST(VoxelMap, NearestInDenseVoxelsIsTheFirstStoredOfExactTies) {
   // nearest() computes a voxel's distances in SIMD blocks of several points (the last block
   // padded) and chunks of blocks: it must return the very point a plain loop over the voxel's

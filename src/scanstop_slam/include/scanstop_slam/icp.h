@@ -58,7 +58,7 @@ class VoxelMap {
   /// computes a whole block's squared distances with SIMD instructions of the baseline ISA.
   static constexpr int kLanes = 8;
   struct Cell {
-    Key key = 0;
+    Key key = 0;                ///< key(x, y, z) of the voxel
     std::vector<float> blocks;  ///< 3 * kLanes floats per block
     std::vector<int8_t> views;  ///< per point: Surface::view, 3 components * 127 (zeros: not known)
     uint32_t count = 0;         ///< points stored (in the order they were added)
@@ -80,14 +80,28 @@ class VoxelMap {
   /// Cell::normal and Cell::planar from the points of the cell and its 6 face neighbours.
   void estimateNormal(Cell& cell) const;
 
-  /// Open-addressing hash (linear probing, power-of-two table, at most half full) from voxel key
-  /// to an index into cells_: one flat array probe per lookup instead of a node-based map's chain.
-  int32_t findCell(Key k) const;
-  int32_t findOrAddCell(Key k);
+  /// 4x4x4 voxels: which of them hold points (bit (x & 3) | (y & 3) << 2 | (z & 3) << 4) and their
+  /// indices into cells_. A query's neighbour voxels mostly share its brick, so one hash lookup
+  /// serves many of them, and an empty one costs a bit test instead of a probe (on the room pair at
+  /// c_max 0.1 m over half of the voxels a query looks up are empty).
+  struct Brick {
+    Key key = 0;
+    uint64_t occupied = 0;
+    int32_t cells[64];
+  };
+  static int brickBit(int x, int y, int z) { return (x & 3) | (y & 3) << 2 | (z & 3) << 4; }
+  /// Open-addressing hash (linear probing, power-of-two table, at most half full) from brick key
+  /// (key(x >> 2, y >> 2, z >> 2)) to an index into bricks_: one flat array probe per lookup
+  /// instead of a node-based map's chain.
+  int32_t findBrick(Key k) const;
+  int32_t findOrAddCell(int x, int y, int z);
+  /// The cell of voxel (x, y, z), -1 if it holds no points.
+  int32_t findCell(int x, int y, int z) const;
   void growTable();
   std::vector<Cell> cells_;
+  std::vector<Brick> bricks_;
   std::vector<Key> slot_keys_;
-  std::vector<int32_t> slot_cells_;  ///< -1: empty slot
+  std::vector<int32_t> slot_bricks_;  ///< -1: empty slot
   size_t slot_mask_ = 0;
 };
 
