@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <random>
 #include <set>
@@ -196,6 +197,35 @@ TEST(VoxelMap, NearestIsExactForRadiiUpToSeveralVoxels) {
   EXPECT_GT(found_count, 1000);  // the radii both find and miss
 }
 
+/// For each radius, `count` queries drawn by `query()`: nearest() finds a point exactly when a scan of
+/// every point does, and the same point (the first stored of exact ties) at the same distance.
+/// found_count: the queries that found one.
+void expectNearestAsBruteForce(const VoxelMap& map, const std::vector<Eigen::Vector3f>& pts,
+                               std::initializer_list<double> radii, int count,
+                               const std::function<Eigen::Vector3f()>& query, int& found_count) {
+  found_count = 0;
+  for (double radius : radii) {
+    for (int q = 0; q < count; ++q) {
+      const Eigen::Vector3f at = query();
+      float brute = static_cast<float>(radius * radius);
+      int brute_index = -1;
+      for (size_t i = 0; i < pts.size(); ++i) {
+        const float d2 = (pts[i] - at).squaredNorm();
+        if (d2 < brute) brute = d2, brute_index = static_cast<int>(i);
+      }
+      Eigen::Vector3f out;
+      float d2 = 0.0f;
+      const bool found = map.nearest(at, radius, out, d2);
+      ASSERT_EQ(found, brute_index >= 0) << "radius " << radius << " query " << at.transpose();
+      if (found) {
+        ASSERT_EQ(out, pts[brute_index]) << "radius " << radius << " query " << at.transpose();
+        ASSERT_EQ(d2, brute);
+        ++found_count;
+      }
+    }
+  }
+}
+
 TEST(VoxelMap, NearestIsExactAcrossBricksOnBothSidesOfZero) {
   // The voxels are looked up through bricks of 4x4x4 voxels (floor division of negative voxel
   // coordinates, neighbours in the next brick): clusters around a corner where x, y and z change
@@ -208,26 +238,9 @@ TEST(VoxelMap, NearestIsExactAcrossBricksOnBothSidesOfZero) {
     VoxelMap map(0.1, 1000);
     map.add(pts);
     int found_count = 0;
-    for (double radius : {0.07, 0.1, 0.35}) {
-      for (int q = 0; q < 1500; ++q) {
-        const Eigen::Vector3f query = offset + Eigen::Vector3f(u(rng), u(rng), u(rng));
-        float brute = static_cast<float>(radius * radius);
-        int brute_index = -1;
-        for (size_t i = 0; i < pts.size(); ++i) {
-          const float d2 = (pts[i] - query).squaredNorm();
-          if (d2 < brute) brute = d2, brute_index = static_cast<int>(i);
-        }
-        Eigen::Vector3f out;
-        float d2 = 0.0f;
-        const bool found = map.nearest(query, radius, out, d2);
-        ASSERT_EQ(found, brute_index >= 0) << "radius " << radius << " query " << query.transpose();
-        if (found) {
-          ASSERT_EQ(out, pts[brute_index]) << "radius " << radius << " query " << query.transpose();
-          ASSERT_EQ(d2, brute);
-          ++found_count;
-        }
-      }
-    }
+    ASSERT_NO_FATAL_FAILURE(expectNearestAsBruteForce(
+        map, pts, {0.07, 0.1, 0.35}, 1500, [&] { return Eigen::Vector3f(offset + Eigen::Vector3f(u(rng), u(rng), u(rng))); },
+        found_count));
     EXPECT_GT(found_count, 1000) << offset.transpose();
     EXPECT_LT(found_count, 4400) << offset.transpose();  // and miss
   }
@@ -289,26 +302,8 @@ TEST(VoxelMap, NearestIsExactInDenseVoxels) {
   map.add(pts);
   ASSERT_EQ(map.size(), pts.size());
   int found_count = 0;
-  for (double radius : {0.03, 0.1, 0.25}) {
-    for (int q = 0; q < 1500; ++q) {
-      const Eigen::Vector3f query(u(rng), u(rng), u(rng));
-      float brute = static_cast<float>(radius * radius);
-      int brute_index = -1;
-      for (size_t i = 0; i < pts.size(); ++i) {
-        const float d2 = (pts[i] - query).squaredNorm();
-        if (d2 < brute) brute = d2, brute_index = static_cast<int>(i);
-      }
-      Eigen::Vector3f out;
-      float d2 = 0.0f;
-      const bool found = map.nearest(query, radius, out, d2);
-      ASSERT_EQ(found, brute_index >= 0) << "radius " << radius << " query " << query.transpose();
-      if (found) {
-        ASSERT_EQ(out, pts[brute_index]) << "radius " << radius << " query " << query.transpose();
-        ASSERT_EQ(d2, brute);
-        ++found_count;
-      }
-    }
-  }
+  ASSERT_NO_FATAL_FAILURE(expectNearestAsBruteForce(
+      map, pts, {0.03, 0.1, 0.25}, 1500, [&] { return Eigen::Vector3f(u(rng), u(rng), u(rng)); }, found_count));
   EXPECT_GT(found_count, 1000);
 }
 
