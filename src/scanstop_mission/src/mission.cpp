@@ -421,6 +421,8 @@ State Mission::run() {
     const Pose2D p = s.estimate();
     return (Eigen::Vector2d(p.x, p.y) - homeOf(s)).norm() <= config_.home_tolerance_m;
   };
+  // On the way back: exploration is complete and return_home is on (also for a resumed saved path).
+  const auto homeward = [&](const MissionState& s) { return config_.return_home && s.complete; };
   for (int cycle = 0; cycle < config_.max_cycles; ++cycle) {
     if (!checkControl()) return finish(State::Aborted, "aborted by the user");
     if (failed_cycles >= config_.max_consecutive_failed_cycles)
@@ -442,13 +444,13 @@ State Mission::run() {
             ") from waypoint " + std::to_string(first + 1) + " of " + std::to_string(plan.waypoints.size()));
     } else {
       // Exploration complete and return_home: plan the way back to the start, until there.
-      const bool homeward = config_.return_home && now.complete;
-      if (homeward && atHome(now)) {
+      const bool back = homeward(now);
+      if (back && atHome(now)) {
         event("back at the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) + "), " +
               fmt((Eigen::Vector2d(now.estimate().x, now.estimate().y) - homeOf(now)).norm()) + " m from it");
         break;
       }
-      if (homeward && home_plans >= 3) {
+      if (back && home_plans >= 3) {
         event("did not get back to the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) + ") in " +
                   std::to_string(home_plans) + " plans; the mission ends here",
               true);
@@ -456,15 +458,15 @@ State Mission::run() {
       }
       // Plan.
       setState(State::Planning);
-      const std::optional<Eigen::Vector2d> goal = homeward ? std::optional<Eigen::Vector2d>(homeOf(now)) : std::nullopt;
-      if (homeward) ++home_plans;
+      const std::optional<Eigen::Vector2d> goal = back ? std::optional<Eigen::Vector2d>(homeOf(now)) : std::nullopt;
+      if (back) ++home_plans;
       for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
         backoff(attempt);
         plan = robot_.planNext(now.estimate(), now.unreachable, goal);
         if (plan.success) break;
         event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
       }
-      if (!plan.success && homeward) {
+      if (!plan.success && back) {
         event("no way back to the start: " + plan.message + "; the mission ends here", true);
         break;
       }
@@ -482,7 +484,7 @@ State Mission::run() {
         state_.complete = true;
         state_.complete_reason = plan.complete_reason;
       }
-      if (plan.complete && !homeward) {
+      if (plan.complete && !back) {
         if (!config_.return_home || atHome(snapshot())) break;
         save();
         event("exploration complete; returning to the start (" + fmt(homeOf(now).x()) + ", " +
@@ -499,7 +501,7 @@ State Mission::run() {
         event("the explorer returned an empty path without completing; replanning", true);
         continue;
       }
-      info_("plan " + std::to_string(now.plans + 1) + (homeward ? " (the way back)" : "") + ": target (" +
+      info_("plan " + std::to_string(now.plans + 1) + (back ? " (the way back)" : "") + ": target (" +
             fmt(plan.target.x()) + ", " +
             fmt(plan.target.y()) + "), " + std::to_string(plan.waypoints.size()) + " waypoints, score " +
             fmt(plan.score, 4) + ", coverage " + fmt(plan.coverage * 100.0, 1) + " %");
@@ -526,9 +528,8 @@ State Mission::run() {
     const size_t scans_before = snapshot().scans.size();
     bool replan = false;
     double travel = 0.0;  // planned path length since the last scan [m]
-    const double scan_travel = config_.return_home && snapshot().complete
-                                   ? std::max(config_.min_scan_travel_m, config_.home_scan_travel_m)
-                                   : config_.min_scan_travel_m;
+    const double scan_travel = homeward(snapshot()) ? std::max(config_.min_scan_travel_m, config_.home_scan_travel_m)
+                                                    : config_.min_scan_travel_m;
     Eigen::Vector2d from(now.estimate().x, now.estimate().y);
     for (size_t i = first; i < plan.waypoints.size() && !replan; ++i) {
       travel += (plan.waypoints[i] - from).norm();

@@ -55,6 +55,10 @@ class FakeSystem : public RobotSystem {
   std::vector<Eigen::Vector2d> targets;
   std::vector<bool> visited;
   std::vector<Eigen::Vector2d> goals;  ///< goals of the plans asked for with one (the way back)
+  std::vector<Eigen::Vector2d> home_via;  ///< landmarks (scan_at) of the way back before its target
+  Eigen::Vector2d goal_offset = Eigen::Vector2d::Zero();  ///< the way back's target = goal + this
+  bool fail_goal_plans = false;                           ///< every plan with a goal fails
+  size_t scans_at_first_goal = 0;                         ///< registered scans when the way back was first planned
   int plan_failures_left = 0;
   bool always_fail_plan = false;
   bool insert_intermediate = false;               // add a mid-point landmark with scan_at = true
@@ -159,12 +163,22 @@ class FakeSystem : public RobotSystem {
     size_t done = 0;
     for (bool v : visited) done += v ? 1 : 0;
     r.coverage = targets.empty() ? 1.0 : static_cast<double>(done) / targets.size();
-    if (goal) {  // straight to the goal; completeness as always
+    if (goal) {  // via home_via (if any) to the goal (+ goal_offset); completeness as always
+      if (goals.empty()) scans_at_first_goal = slam_poses.size();
       goals.push_back(*goal);
+      if (fail_goal_plans) {
+        r.success = false;
+        r.message = "no reachable cell to go to near the goal";
+        return r;
+      }
       r.complete = done == targets.size();
       if (r.complete) r.complete_reason = "no reachable cell borders unknown space";
-      r.target = *goal;
-      r.waypoints.push_back(*goal);
+      r.target = *goal + goal_offset;
+      for (const auto& w : home_via) {
+        r.waypoints.push_back(w);
+        r.scan_at.push_back(true);
+      }
+      r.waypoints.push_back(r.target);
       r.scan_at.push_back(true);
       return r;
     }
@@ -272,6 +286,73 @@ TEST(Mission, ReturnsToTheStartOnceExplorationIsComplete) {
   EXPECT_EQ(resumed.run(), State::Done);
   EXPECT_TRUE(again.goals.empty());
   EXPECT_EQ(resumed.snapshot().scans.size(), 4u);
+}
+
+TEST(Mission, HomeScanTravelSpacesTheScansOnTheWayBack) {
+  // One target 6 m out; the way back passes landmarks every 1.5 m. Scans on it: at the first
+  // landmark after home_scan_travel of driving, and at the start.
+  for (const auto& [spacing, expected_x] : {std::make_pair(4.0, std::vector<double>{1.5, 0.0}),
+                                            std::make_pair(2.0, std::vector<double>{3.0, 0.0}),
+                                            std::make_pair(0.0, std::vector<double>{4.5, 3.0, 1.5, 0.0})}) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.targets = {{6.0, 0.0}};
+    sys.home_via = {{4.5, 0.0}, {3.0, 0.0}, {1.5, 0.0}};
+    MissionConfig c = config(dir.path());
+    c.return_home = true;
+    c.home_scan_travel_m = spacing;
+    Mission m(c, sys, quiet, quiet);
+    EXPECT_EQ(m.run(), State::Done);
+    const MissionState s = m.snapshot();
+    EXPECT_TRUE(s.complete);
+    EXPECT_EQ(sys.goals.size(), 1u) << spacing;
+    // The scans of the way back (the fake's odometry drifts: the 6 m leg out may take a second try).
+    const size_t k = sys.scans_at_first_goal;
+    std::string where;
+    for (const auto& scan : s.scans) where += " (" + std::to_string(scan.map_pose.x) + ", " + std::to_string(scan.map_pose.y) + ")";
+    ASSERT_GE(k, 2u) << where;
+    ASSERT_EQ(s.scans.size() - k, expected_x.size()) << "home_scan_travel " << spacing << ", scans at" << where;
+    for (size_t i = 0; i < expected_x.size(); ++i)
+      EXPECT_NEAR(s.scans[k + i].map_pose.x, expected_x[i], 0.2) << "home_scan_travel " << spacing << ", scan " << k + i;
+  }
+}
+
+TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackOrItNeverArrives) {
+  const auto hasEvent = [](const MissionState& s, const std::string& text) {
+    for (const auto& e : s.events)
+      if (e.what.find(text) != std::string::npos) return true;
+    return false;
+  };
+  {  // Every plan of the way back fails: the exploration is kept, the mission ends Done.
+    TempDir dir;
+    FakeSystem sys;
+    sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
+    sys.fail_goal_plans = true;
+    MissionConfig c = config(dir.path());
+    c.return_home = true;
+    Mission m(c, sys, quiet, quiet);
+    EXPECT_EQ(m.run(), State::Done);
+    const MissionState s = m.snapshot();
+    EXPECT_TRUE(s.complete);
+    EXPECT_EQ(s.scans.size(), 3u);                          // start and the two targets
+    EXPECT_EQ(sys.goals.size(), 1u + c.max_step_retries);  // one plan, retried
+    EXPECT_TRUE(hasEvent(s, "no way back to the start")) << s.events.back().what;
+  }
+  {  // The way back always ends 1 m from the start (nearest reachable cell): 3 plans, then the end.
+    TempDir dir;
+    FakeSystem sys;
+    sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
+    sys.goal_offset = Eigen::Vector2d(1.0, 0.0);
+    MissionConfig c = config(dir.path());
+    c.return_home = true;
+    Mission m(c, sys, quiet, quiet);
+    EXPECT_EQ(m.run(), State::Done);
+    const MissionState s = m.snapshot();
+    EXPECT_TRUE(s.complete);
+    EXPECT_EQ(sys.goals.size(), 3u);
+    EXPECT_EQ(s.scans.size(), 6u);  // start, two targets, three ends of the way back
+    EXPECT_TRUE(hasEvent(s, "did not get back to the start")) << s.events.back().what;
+  }
 }
 
 TEST(Mission, StraightMotionsNeverExceedDMax) {
