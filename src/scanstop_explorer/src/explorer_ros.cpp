@@ -60,7 +60,10 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "frontier_distance_m", c.planner.frontier_distance_m);
   optional(pnh, "occluded_frontier_knowledge", c.planner.occluded_frontier_knowledge);
   optional(pnh, "occluded_frontier_min_m", c.planner.occluded_frontier_min_m);
+  optional(pnh, "frontier_min_unknown_m", c.planner.frontier_min_unknown_m);
+  optional(pnh, "ignore_wall_base_frontier", c.planner.ignore_wall_base_frontier);
   optional(pnh, "start_snap_m", c.planner.start_snap_m);
+  optional(pnh, "target_clearance_m", c.planner.target_clearance_m);
   optional(pnh, "max_coverage_landmarks", c.planner.max_coverage_landmarks);
   optional(pnh, "known_free_radius_m", c.known_free_radius_m);
   optional(pnh, "self_filter_radius_m", c.self_filter_radius_m);

@@ -70,7 +70,9 @@ void PlannerConfig::validate() const {
   requireInRange("frontier_distance_m", frontier_distance_m, 1e-6, 50.0, "m");
   requireInRange("occluded_frontier_knowledge", occluded_frontier_knowledge, 0.0, 1e6);
   requireInRange("occluded_frontier_min_m", occluded_frontier_min_m, 0.0, 50.0, "m");
+  requireInRange("frontier_min_unknown_m", frontier_min_unknown_m, 0.0, 50.0, "m");
   requireInRange("start_snap_m", start_snap_m, 0.0, 5.0, "m");
+  requireInRange("target_clearance_m", target_clearance_m, 0.0, 5.0, "m");
   requireInRange("max_coverage_landmarks", max_coverage_landmarks, 0, 1e6);
 }
 
@@ -426,25 +428,62 @@ std::vector<std::pair<Eigen::Vector2d, int>> extractPath(const CostMap& cm, cons
   return path;
 }
 
-cv::Mat frontierCells(const cv::Mat& states) {
+cv::Point clearTarget(const cv::Mat& sq_dt, const cv::Mat& allowed, const cv::Point& target, double clearance_cells) {
+  if (clearance_cells <= 0.0 || !inside(sq_dt, target)) return target;
+  const double need = clearance_cells * clearance_cells;
+  if (sq_dt.at<int>(target) >= need) return target;
+  const int reach = static_cast<int>(std::ceil(clearance_cells));
+  cv::Point best = target;
+  long best_d2 = std::numeric_limits<long>::max();
+  for (int r = std::max(0, target.y - reach); r <= std::min(sq_dt.rows - 1, target.y + reach); ++r)
+    for (int c = std::max(0, target.x - reach); c <= std::min(sq_dt.cols - 1, target.x + reach); ++c) {
+      const long d2 = static_cast<long>(c - target.x) * (c - target.x) + static_cast<long>(r - target.y) * (r - target.y);
+      if (d2 > need || d2 >= best_d2) continue;
+      if (!allowed.at<uint8_t>(r, c) || sq_dt.at<int>(r, c) < need) continue;
+      best_d2 = d2;
+      best = cv::Point(c, r);
+    }
+  return best;
+}
+
+cv::Mat frontierCells(const cv::Mat& states, double min_unknown_cells, bool ignore_wall_base) {
+  // Floor cells that may border a frontier: all, or those with no obstacle among their 8 neighbours.
+  cv::Mat source = states == kFloor;
+  if (ignore_wall_base) {
+    cv::Mat near_obstacle;
+    cv::dilate(states == kObstacle, near_obstacle, cv::Mat::ones(3, 3, CV_8U), cv::Point(-1, -1), 1,
+               cv::BORDER_CONSTANT, cv::Scalar(0));
+    source &= ~near_obstacle;
+  }
   cv::Mat f = cv::Mat::zeros(states.size(), CV_8U);
   for (int r = 0; r < states.rows; ++r)
     for (int c = 0; c < states.cols; ++c) {
       if (states.at<uint8_t>(r, c) != kUnknown) continue;
       for (const cv::Point& d : k4) {
         const cv::Point q(c + d.x, r + d.y);
-        if (inside(states, q) && states.at<uint8_t>(q) == kFloor) {
+        if (inside(states, q) && source.at<uint8_t>(q)) {
           f.at<uint8_t>(r, c) = 1;
           break;
         }
       }
     }
+  if (min_unknown_cells > 1.0) {
+    // Enclosed unknown pockets (bounding box smaller than min_unknown_cells both ways) do not count.
+    cv::Mat labels, stats, centroids;
+    const int n = cv::connectedComponentsWithStats(states == kUnknown, labels, stats, centroids, 8, CV_32S);
+    std::vector<uint8_t> keep(n, 0);
+    for (int l = 1; l < n; ++l)
+      keep[l] = std::max(stats.at<int>(l, cv::CC_STAT_WIDTH), stats.at<int>(l, cv::CC_STAT_HEIGHT)) >= min_unknown_cells;
+    for (int r = 0; r < f.rows; ++r)
+      for (int c = 0; c < f.cols; ++c)
+        if (f.at<uint8_t>(r, c) && !keep[labels.at<int>(r, c)]) f.at<uint8_t>(r, c) = 0;
+  }
   return f;
 }
 
 cv::Mat occludedFrontier(const cv::Mat& states, const GridGeometry& g, const std::vector<Eigen::Vector2d>& scans,
-                         double view_radius_m, double min_extent_cells) {
-  const cv::Mat frontier = frontierCells(states);
+                         double view_radius_m, double min_extent_cells, const cv::Mat& given_frontier) {
+  const cv::Mat frontier = given_frontier.empty() ? frontierCells(states) : given_frontier;
   cv::Mat occluded = frontier.clone();
   std::vector<cv::Point> scan_cells;
   for (const Eigen::Vector2d& s : scans) scan_cells.push_back(g.cellOf(s.x(), s.y()));
@@ -498,8 +537,8 @@ cv::Mat occludedFrontier(const cv::Mat& states, const GridGeometry& g, const std
 
 cv::Mat openCells(const cv::Mat& states, const cv::Mat& cost_cells, const cv::Mat& knowledge, const cv::Mat& blacklist,
                   double knowledge_threshold, double frontier_distance_cells, const cv::Mat& occluded,
-                  double occluded_knowledge) {
-  const cv::Mat frontier = frontierCells(states);
+                  double occluded_knowledge, const cv::Mat& given_frontier) {
+  const cv::Mat frontier = given_frontier.empty() ? frontierCells(states) : given_frontier;
   const cv::Mat sq = squaredDistanceTransform(1 - frontier);
   const bool use_occluded = !occluded.empty() && occluded_knowledge > knowledge_threshold;
   const cv::Mat sq_occ = use_occluded ? squaredDistanceTransform(1 - (occluded != 0) / 255) : cv::Mat();
@@ -600,11 +639,13 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   const double res_m = g.resolution;
   res.blacklist = rasterizeDiscs(g, in.blacklist);
   res.evaluation = evaluationMap(res.knowledge, res.cost_map.cost, res_m, cfg.k0, cfg.c0, res.blacklist);
+  const cv::Mat frontier = frontierCells(res.states, cfg.frontier_min_unknown_m / res_m, cfg.ignore_wall_base_frontier);
   if (cfg.occluded_frontier_knowledge > cfg.knowledge_threshold)
-    res.occluded_frontier =
-        occludedFrontier(res.states, g, in.scan_positions, cfg.k_r_m, cfg.occluded_frontier_min_m / res_m);
+    res.occluded_frontier = occludedFrontier(res.states, g, in.scan_positions, cfg.k_r_m,
+                                             cfg.occluded_frontier_min_m / res_m, frontier);
   res.open = openCells(res.states, res.cost_map.cost, res.knowledge, res.blacklist, cfg.knowledge_threshold,
-                       cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge);
+                       cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge,
+                       frontier);
   timer.lap("evaluation_and_termination");
   res.open_cells = static_cast<size_t>(cv::countNonZero(res.open));
   const cv::Mat reached = res.cost_map.predecessor >= 0;
@@ -663,6 +704,11 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   }
   if (!res.complete) res.complete_reason.clear();
   res.score = res.evaluation.at<float>(res.target_cell);
+  {
+    const cv::Point argmax = res.target_cell;
+    res.target_cell = clearTarget(res.sq_dt, reached & (res.blacklist == 0), argmax, cfg.target_clearance_m / res_m);
+    res.target_moved_m = std::hypot(res.target_cell.x - argmax.x, res.target_cell.y - argmax.y) * res_m;
+  }
   res.target_cost_m = res.cost_map.cost.at<float>(res.target_cell) * res_m;
   res.target = g.center(res.target_cell);
   const auto cells = extractPath(res.cost_map, res.target_cell);
@@ -681,7 +727,8 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   res.message = std::string(in.goal ? (res.complete ? "exploration complete; " : "") + std::string("to the goal: ") : "") +
                 "target (" + fmt(res.target.x()) + ", " + fmt(res.target.y()) + ") m, " +
                 std::to_string(res.path.size()) + " waypoints, " + fmt(res.target_cost_m) + " m, b = " +
-                fmt(res.score, 4) + ", " + std::to_string(res.open_cells) + " open cells";
+                fmt(res.score, 4) + ", " + std::to_string(res.open_cells) + " open cells" +
+                (res.target_moved_m > 0.0 ? " (moved " + fmt(res.target_moved_m) + " m off the wall)" : "");
 }
 
 PlanResult planStep(const PlanInput& input, const PlannerConfig& config) {

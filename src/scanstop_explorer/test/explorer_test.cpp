@@ -362,8 +362,11 @@ TEST(Explorer, ExploresA10x8RoomFromRotatingScannerScans) {
       const cv::Point c = g.cellOf(x, y);
       seen += g.contains(c) && r.states.at<uint8_t>(c) == kFloor;
     }
-  EXPECT_GT(static_cast<double>(seen) / total, 0.9) << seen << " of " << total;
-  EXPECT_GT(r.coverage, 0.9);
+  EXPECT_GT(static_cast<double>(seen) / total, 0.99) << seen << " of " << total;
+  // The explorer's own figure (reached cells within k_r_m = 1 m of a scan) is lower: the frontier
+  // ignores wall bases and enclosed unknown pockets, so cells along a wall far from every scan do
+  // not call for one more scan when their floor is seen (52 scans instead of 63, 99.9 % seen both ways).
+  EXPECT_GT(r.coverage, 0.85);
   std::printf("[ info ] 10 x 8 m room: complete after %d plans, %zu scans, floor seen %.1f %%, reason: %s\n", steps,
               ex.scanCount(), 100.0 * seen / total, r.complete_reason.c_str());
 }

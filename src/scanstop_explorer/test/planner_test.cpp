@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <tuple>
 
 #include "scenes.h"
 #include "scanstop_common/error.h"
@@ -297,4 +299,91 @@ TEST(Termination, FrontierAndOpenCells) {
   k.setTo(1.0f);
   EXPECT_EQ(cv::countNonZero(openCells(states, cost, k, cv::Mat(), 1.0, 3.0)), 0);
   EXPECT_EQ(cv::countNonZero(openCells(states, cost, k, cv::Mat(), 2.0, 3.0)), 14);  // the threshold is a parameter
+}
+
+TEST(Termination, FrontierIgnoresEnclosedPocketsAndWallBases) {
+  // Open floor with an unknown 2 x 2 pocket (cells no point fell into).
+  cv::Mat pocket(20, 20, CV_8U, cv::Scalar(kFloor));
+  pocket(cv::Rect(5, 5, 2, 2)).setTo(kUnknown);
+  EXPECT_EQ(cv::countNonZero(frontierCells(pocket)), 4);
+  EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 2.0)), 4);  // as large as the bound: kept
+  EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 3.0)), 0);  // smaller both ways: no frontier
+  EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 0.0, true)), 4);  // no obstacle near it
+  // Floor in columns 0-9, a wall in column 10, unknown space behind it (columns 11-19). The wall has
+  // a 5-cell opening in rows 5-9 and a floor cell in row 15 (a point at its base); both border the
+  // unknown space.
+  cv::Mat wall(20, 20, CV_8U, cv::Scalar(kUnknown));
+  wall.colRange(0, 10).setTo(kFloor);
+  wall.col(10).setTo(kObstacle);
+  wall(cv::Rect(10, 5, 1, 5)).setTo(kFloor);
+  wall.at<uint8_t>(15, 10) = kFloor;
+  const cv::Mat plain = frontierCells(wall);
+  EXPECT_EQ(cv::countNonZero(plain), 6);
+  EXPECT_TRUE(plain.at<uint8_t>(15, 11));
+  // Without wall bases: the opening's 3 middle cells (its end cells and the lone base cell lie
+  // beside the wall's obstacle cells).
+  const cv::Mat f = frontierCells(wall, 12.0, true);
+  EXPECT_EQ(cv::countNonZero(f), 3);
+  for (int r = 6; r <= 8; ++r) EXPECT_TRUE(f.at<uint8_t>(r, 11)) << r;
+  EXPECT_FALSE(f.at<uint8_t>(15, 11));
+}
+
+TEST(TargetClearance, MovesToTheNearestAllowedCellFarEnoughFromAWall) {
+  // 30 x 30 cells, a wall along column 0: sq_dt of (c, r) is c^2 (floor from column 1 on).
+  cv::Mat sq_dt(30, 30, CV_32S);
+  for (int r = 0; r < 30; ++r)
+    for (int c = 0; c < 30; ++c) sq_dt.at<int>(r, c) = c * c;
+  cv::Mat allowed = cv::Mat::ones(30, 30, CV_8U);
+  EXPECT_EQ(clearTarget(sq_dt, allowed, {7, 12}, 10.0), cv::Point(10, 12));
+  EXPECT_EQ(clearTarget(sq_dt, allowed, {12, 12}, 10.0), cv::Point(12, 12));  // far enough already
+  EXPECT_EQ(clearTarget(sq_dt, allowed, {7, 12}, 0.0), cv::Point(7, 12));     // off
+  allowed.at<uint8_t>(12, 10) = 0;  // not allowed (blacklisted or unreached): the next nearest, first in raster order
+  EXPECT_EQ(clearTarget(sq_dt, allowed, {7, 12}, 10.0), cv::Point(10, 11));
+  // The allowed cells that far from the wall are farther than the clearance from the target: it stays.
+  cv::Mat far_only = cv::Mat::zeros(30, 30, CV_8U);
+  far_only.colRange(18, 30).setTo(1);
+  EXPECT_EQ(clearTarget(sq_dt, far_only, {7, 12}, 10.0), cv::Point(7, 12));
+  EXPECT_EQ(clearTarget(sq_dt, far_only, {8, 12}, 10.0), cv::Point(18, 12));  // exactly the clearance away
+  // A narrow passage (no cell has the clearance): it stays.
+  EXPECT_EQ(clearTarget(cv::Mat(30, 30, CV_32S, cv::Scalar(16)), allowed, {7, 12}, 10.0), cv::Point(7, 12));
+}
+
+TEST(Plan, TargetClearanceKeepsTheTargetOffTheWalls) {
+  PlannerConfig cfg;
+  int moved = 0;
+  for (const auto& [name, scene, robot] :
+       {std::make_tuple("corridor", test::corridor(), Eigen::Vector2d(0.5, 0.6)),
+        std::make_tuple("two rooms", test::twoRooms(), Eigen::Vector2d(1.0, 1.0)),
+        std::make_tuple("L", test::lShape(), Eigen::Vector2d(4.4, 0.75))}) {
+    const cv::Mat states = test::seenStates(scene, {robot}, 2.5);
+    const PlanInput in = inputFor(scene, states, {robot}, Pose2D(robot.x(), robot.y(), 0.0));
+    cfg.target_clearance_m = 0.0;
+    const PlanResult plain = planStep(in, cfg);
+    expectValidPath(plain, cfg, name);
+    EXPECT_EQ(plain.target_moved_m, 0.0) << name;
+    cfg.target_clearance_m = 0.5;
+    const PlanResult r = planStep(in, cfg);
+    expectValidPath(r, cfg, name);  // same argmax b, a path of the target's cost
+    const double res = r.geometry.resolution;
+    const double plain_clearance = std::sqrt(plain.sq_dt.at<int>(plain.target_cell)) * res;
+    const double clearance = std::sqrt(r.sq_dt.at<int>(r.target_cell)) * res;
+    EXPECT_NEAR(r.target_moved_m, (r.target - plain.target).norm(), 1e-9) << name;
+    EXPECT_LE(r.target_moved_m, 0.5 + 1e-9) << name;
+    if (plain_clearance >= 0.5) {
+      EXPECT_EQ(r.target_cell, plain.target_cell) << name;
+    } else if (r.target_moved_m > 0.0) {
+      EXPECT_GE(clearance, 0.5 - 1e-9) << name;
+    } else {
+      // Stays only when no allowed cell within 0.5 m has the clearance (the corridor is 1.2 m wide).
+      for (int row = 0; row < r.sq_dt.rows; ++row)
+        for (int col = 0; col < r.sq_dt.cols; ++col)
+          if (std::hypot(col - r.target_cell.x, row - r.target_cell.y) * res <= 0.5 &&
+              r.cost_map.predecessor.at<int>(row, col) >= 0)
+            EXPECT_LT(std::sqrt(r.sq_dt.at<int>(row, col)) * res, 0.5) << name;
+    }
+    std::printf("%s: argmax clearance %.2f m -> %.2f m (moved %.2f m)\n", name, plain_clearance, clearance,
+                r.target_moved_m);
+    moved += r.target_moved_m > 0.0;
+  }
+  EXPECT_GE(moved, 1);  // the argmax sits at the accessible border in these scenes
 }

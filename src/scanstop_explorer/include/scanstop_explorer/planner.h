@@ -34,7 +34,22 @@ struct PlannerConfig {
   /// Occluded cells of frontier pieces (8-connected) shorter than this (bounding box extent) are
   /// ignored: shadows of chair legs and wall corners, not openings the robot could pass [m], [0, 50]
   double occluded_frontier_min_m = 0.6;
+  /// Unknown regions (8-connected) whose bounding box is smaller than this in both directions are
+  /// no frontier: pockets enclosed by known cells, such as a wall cell no point fell into, hide no
+  /// floor the robot could use (0: every unknown cell next to floor is frontier) [m], [0, 50]
+  double frontier_min_unknown_m = 0.6;
+  /// An unknown cell whose only floor neighbours lie beside an obstacle cell (8-neighbours) is no
+  /// frontier: it sits in or behind a wall (a wall base's floor cell, a noisy wall's outer face),
+  /// not at the edge of a view into unknown space. false: the plain definition.
+  bool ignore_wall_base_frontier = true;
   double start_snap_m = 0.5;           ///< robot off the accessible floor: join it within this distance [m], [0, 5]
+  /// A chosen target (new scan location or goal) closer than this to a non-floor cell moves to the
+  /// nearest reached, not blacklisted cell at least this far from one, if there is one within
+  /// this distance of it; otherwise it stays (a door or narrow passage keeps its target). The path's landmarks lie on the skeleton, far from
+  /// walls; the last leg ends at the target, and a target right at the accessible border leaves
+  /// the robot robot_radius_m minus its own radius against the drift of that leg. 0: off (the
+  /// thesis' argmax as it is) [m], [0, 5]
+  double target_clearance_m = 0.0;
   int max_coverage_landmarks = 2000;   ///< bound on the landmarks added for cells no landmark sees, [0, 1e6]
 
   /// Throws ConfigError naming the parameter, its value and the allowed range.
@@ -123,26 +138,35 @@ cv::Point argmaxCell(const cv::Mat& evaluation, const cv::Mat& candidates = cv::
 /// Path back through the predecessors, in continuous cell coordinates: robot node, landmarks, target
 /// cell centre; with the node index of each waypoint (-1 for the target).
 std::vector<std::pair<Eigen::Vector2d, int>> extractPath(const CostMap& cost_map, const cv::Point& target);
+/// The cell of `allowed` (CV_8U) nearest to `target` (first in raster order on ties) whose squared
+/// distance transform value `sq_dt` (CV_32S, squared cells) is at least clearance_cells^2, searched
+/// within clearance_cells of the target; `target` itself when it has that clearance already or
+/// no such cell is there (or clearance_cells <= 0).
+cv::Point clearTarget(const cv::Mat& sq_dt, const cv::Mat& allowed, const cv::Point& target, double clearance_cells);
 
-/// Frontier cells: unknown cells 4-adjacent to a floor cell. CV_8U 0/1.
-cv::Mat frontierCells(const cv::Mat& states);
+/// Frontier cells: unknown cells 4-adjacent to a floor cell. CV_8U 0/1. With min_unknown_cells > 0
+/// not those of an unknown region (8-connected) whose bounding box is smaller than that in both
+/// directions; with ignore_wall_base the floor neighbour must have no obstacle cell among its 8
+/// neighbours.
+cv::Mat frontierCells(const cv::Mat& states, double min_unknown_cells = 0.0, bool ignore_wall_base = false);
 /// Frontier cells that no scan position within view_radius_m has in plain sight: every straight
 /// line (4-connected cell traversal) from the scan's cell to the frontier cell crosses a cell that
 /// is not floor, or passes beside an obstacle cell (8-neighbour), before reaching it; in the last 2
 /// cells before it only obstacle cells block (a line at a grazing angle enters a straight frontier
 /// early, and a frontier in a wall gap lies beside the wall). Cells of frontier pieces (8-connected) whose
-/// bounding box is smaller than min_extent_cells in both directions are dropped. CV_8U 0/1.
+/// bounding box is smaller than min_extent_cells in both directions are dropped. `frontier`: the
+/// frontier cells to test (empty: frontierCells(states)). CV_8U 0/1.
 cv::Mat occludedFrontier(const cv::Mat& states, const GridGeometry& geometry,
                          const std::vector<Eigen::Vector2d>& scan_positions, double view_radius_m,
-                         double min_extent_cells = 0.0);
+                         double min_extent_cells = 0.0, const cv::Mat& frontier = cv::Mat());
 /// Open cells (termination): reached cells (finite cost), not blacklisted, and either with
 /// knowledge below knowledge_threshold and a frontier cell within frontier_distance_cells, or (when
 /// `occluded` is given) with knowledge below occluded_knowledge and a cell of `occluded` (CV_8U
 /// occluded frontier cells) within frontier_distance_cells. Exploration is complete when there is
-/// none. CV_8U 0/1.
+/// none. `frontier`: the frontier cells (empty: frontierCells(states)). CV_8U 0/1.
 cv::Mat openCells(const cv::Mat& states, const cv::Mat& cost_cells, const cv::Mat& knowledge, const cv::Mat& blacklist,
                   double knowledge_threshold, double frontier_distance_cells, const cv::Mat& occluded = cv::Mat(),
-                  double occluded_knowledge = 0.0);
+                  double occluded_knowledge = 0.0, const cv::Mat& frontier = cv::Mat());
 
 // ---- the whole step -------------------------------------------------------------------------
 
@@ -177,7 +201,8 @@ struct PlanResult {
   std::vector<bool> scan_at;          ///< per waypoint: scan there (intermediate landmarks and target)
   cv::Point target_cell{-1, -1};
   Eigen::Vector2d target = Eigen::Vector2d::Zero();
-  double score = 0.0;                 ///< b at the target
+  double score = 0.0;                 ///< b at the target (the argmax, before a target_clearance_m move)
+  double target_moved_m = 0.0;        ///< how far target_clearance_m moved the target from the argmax [m]
   double target_cost_m = 0.0;         ///< travel distance to the target [m]
 
   // termination and statistics
