@@ -41,23 +41,32 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
     return cv::Point(static_cast<int>(std::floor((v.x() - g.origin_x) / resolution)),
                      static_cast<int>(std::floor((v.y() - g.origin_y) / resolution)));
   };
+  cv::Mat floor = cv::Mat::zeros(g.height, g.width, CV_8U);  // cells under a floor triangle
   for (const Eigen::Vector3i& f : world.faces) {
     const Eigen::Vector3f& a = world.vertices.at(f[0]);
     const Eigen::Vector3f& b = world.vertices.at(f[1]);
     const Eigen::Vector3f& c = world.vertices.at(f[2]);
     const float zmin = std::min({a.z(), b.z(), c.z()}), zmax = std::max({a.z(), b.z(), c.z()});
-    if (zmax < z_lo || zmin > z_hi) continue;  // floor, ceiling, table tops above the layer
     const cv::Point pts[3] = {px(a), px(b), px(c)};
+    if (zmax < z_lo) {  // floor
+      cv::fillConvexPoly(floor, pts, 3, cv::Scalar(1));
+      continue;
+    }
+    if (zmin > z_hi) continue;  // ceiling, table tops above the layer
     cv::fillConvexPoly(out.obstacle, pts, 3, cv::Scalar(1));
     cv::polylines(out.obstacle, std::vector<cv::Point>(pts, pts + 3), true, cv::Scalar(1));  // vertical faces
   }
+  // The robot stands on the floor: where the world has floor triangles, a cell without one (beyond
+  // the floor's edge) is no place for the disc either (a world without any: everywhere is floor).
+  cv::Mat blocked = out.obstacle.clone();
+  if (cv::countNonZero(floor) > 0) blocked |= (floor == 0) / 255;
   const cv::Point s = g.cellOf(start_world.x, start_world.y);
-  if (!g.contains(s) || out.obstacle.at<uint8_t>(s))
+  if (!g.contains(s) || blocked.at<uint8_t>(s))
     throw std::invalid_argument("groundTruthCoverage: the start (" + std::to_string(start_world.x) + ", " +
-                                std::to_string(start_world.y) + ") is outside the world or inside an obstacle");
+                                std::to_string(start_world.y) + ") is outside the world, off its floor or inside an obstacle");
   // Free cells whose distance to an obstacle is at least the radius, component of the start.
   cv::Mat dist;
-  cv::distanceTransform(1 - out.obstacle, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::distanceTransform(1 - blocked, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
   cv::Mat centres = dist >= static_cast<float>(robot_radius_m / resolution);
   if (!centres.at<uint8_t>(s)) throw std::invalid_argument("groundTruthCoverage: the robot disc does not fit at the start");
   cv::Mat mask = cv::Mat::zeros(g.height + 2, g.width + 2, CV_8U);
@@ -67,7 +76,7 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
   const int r = static_cast<int>(std::ceil(robot_radius_m / resolution));
   cv::Mat swept;
   cv::dilate(comp, swept, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1)));
-  out.reachable = (swept != 0) & (out.obstacle == 0);
+  out.reachable = (swept != 0) & (blocked == 0);
   out.reachable /= 255;
   // Map floor in the world grid, grown by the tolerance.
   cv::Mat map_floor = cv::Mat::zeros(g.height, g.width, CV_8U);

@@ -264,7 +264,7 @@ void addBox(scanstop::TriangleMesh& m, const Eigen::Vector3f& lo, const Eigen::V
 }
 
 /// Room x, y in [0, 4], corridor y in [-2.1, -0.1] behind a 0.1 m wall with a 0.9 m door
-/// x in [0.4, 1.3]; outer walls; a floor slab (below the obstacle layer: ignored).
+/// x in [0.4, 1.3]; outer walls; a floor slab (below the obstacle layer: the floor the robot stands on).
 scanstop::TriangleMesh roomAndCorridor() {
   scanstop::TriangleMesh world;
   addBox(world, {-0.5f, -2.6f, -0.1f}, {4.5f, 4.5f, 0.0f});
@@ -277,6 +277,44 @@ scanstop::TriangleMesh roomAndCorridor() {
   return world;
 }
 }  // namespace
+
+TEST(GroundTruthCoverage, TheRobotDiscStaysOnTheFloor) {
+  // A 4 x 4 m room (0.1 m walls) with a 1 m opening in its east wall, on a floor slab that reaches
+  // `band` beyond the walls (like the real house's floor rectangle). A 0.5 m band is too narrow for
+  // the 0.6 m disc, so the reachable floor is the room; a 1.2 m band is a ring the robot can drive.
+  const auto world = [](float band) {
+    scanstop::TriangleMesh w;
+    addBox(w, {-0.1f - band, -0.1f - band, -0.1f}, {4.1f + band, 4.1f + band, 0.0f});
+    addBox(w, {-0.1f, -0.1f, 0.0f}, {0.0f, 4.1f, 2.5f});   // west
+    addBox(w, {-0.1f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});   // south
+    addBox(w, {-0.1f, 4.0f, 0.0f}, {4.1f, 4.1f, 2.5f});    // north
+    addBox(w, {4.0f, -0.1f, 0.0f}, {4.1f, 1.5f, 2.5f});    // east, south of the opening
+    addBox(w, {4.0f, 2.5f, 0.0f}, {4.1f, 4.1f, 2.5f});     // east, north of it
+    return w;
+  };
+  const Pose2D start(2.0, 2.0, 0.0);
+  GridGeometry mg;
+  mg.resolution = 0.05;
+  mg.origin_x = -4.0;
+  mg.origin_y = -4.0;
+  mg.width = 160;
+  mg.height = 160;
+  const cv::Mat nothing_seen = cv::Mat::zeros(mg.height, mg.width, CV_8U);
+  const GroundTruthCoverage narrow = groundTruthCoverage(world(0.5f), start, nothing_seen, mg, start, 0.3);
+  const GroundTruthCoverage wide = groundTruthCoverage(world(1.2f), start, nothing_seen, mg, start, 0.3);
+  EXPECT_GT(narrow.reachable_m2, 15.0);   // the room (16 m2 less the corners a disc cannot sweep)
+  // and what the disc sweeps standing in the opening (under 0.5 m2), not the 9.4 m2 band outside.
+  EXPECT_LE(narrow.reachable_m2, 17.0);
+  EXPECT_GT(wide.reachable_m2, 16.0 + 20.0);  // the ring: (4.2 + 2.4)^2 - 4.2^2 = 25.9 m2 less its corners
+  // No reachable cell lies off the floor slab.
+  for (int r = 0; r < wide.reachable.rows; ++r)
+    for (int c = 0; c < wide.reachable.cols; ++c)
+      if (wide.reachable.at<uint8_t>(r, c)) {
+        const Eigen::Vector2d p = wide.geometry.center({c, r});
+        ASSERT_TRUE(p.x() > -1.3 - 0.05 && p.x() < 5.3 + 0.05 && p.y() > -1.3 - 0.05 && p.y() < 5.3 + 0.05)
+            << p.transpose();
+      }
+}
 
 TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCovered) {
   // World: roomAndCorridor().

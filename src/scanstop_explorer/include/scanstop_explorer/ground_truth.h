@@ -28,7 +28,9 @@ struct GroundTruthCoverage {
 };
 
 /// Rasterises the world mesh's triangles that reach into the obstacle layer (z in [z_lo, z_hi]) onto a
-/// world-frame grid (resolution [m]), erodes the free cells by robot_radius_m, takes the
+/// world-frame grid (resolution [m]), and those below z_lo as floor; free cells are floor cells
+/// (every cell when the mesh has no floor triangle) without an obstacle. Erodes the free cells by
+/// robot_radius_m (the disc stays on the floor: an edge of the floor bounds it like a wall), takes the
 /// 4-connected component of the start position and grows it back by the radius: the true
 /// reachable floor. `states` (CellState, map frame, `map_geometry`) are the explorer's floor grid;
 /// T_world_map maps it into the world. A reachable cell is observed when a floor cell of the map
