@@ -97,10 +97,17 @@ int32_t VoxelMap::findOrAddCell(int x, int y, int z) {
   return brick.cells[bit];
 }
 
-VoxelMap::Key VoxelMap::key(int x, int y, int z) const {
+VoxelMap::Key VoxelMap::key(int x, int y, int z) {
   // 21 bits per axis (+-1e6 voxels): +-100 km at 10 cm.
   const auto enc = [](int v) { return static_cast<int64_t>(v + (1 << 20)) & ((1 << 21) - 1); };
   return (enc(x) << 42) | (enc(y) << 21) | enc(z);
+}
+
+void VoxelMap::decode(Key k, int& x, int& y, int& z) {
+  const auto dec = [](int64_t bits) { return static_cast<int>(bits & ((1 << 21) - 1)) - (1 << 20); };
+  x = dec(k >> 42);
+  y = dec(k >> 21);
+  z = dec(k);
 }
 
 void VoxelMap::Cell::push(const Eigen::Vector3f& p, const Eigen::Vector3f& view) {
@@ -136,9 +143,8 @@ void VoxelMap::estimateNormal(Cell& cell) const {
   // a noisy wall (3 cm of a 10 cm voxel with 1 cm noise is no plane by itself), and the neighbour
   // across it holds the rest. Both faces of a thin wall give the same normal; the points' views
   // tell the faces apart.
-  const int x = static_cast<int>((cell.key >> 42) & ((1 << 21) - 1)) - (1 << 20);
-  const int y = static_cast<int>((cell.key >> 21) & ((1 << 21) - 1)) - (1 << 20);
-  const int z = static_cast<int>(cell.key & ((1 << 21) - 1)) - (1 << 20);
+  int x, y, z;
+  decode(cell.key, x, y, z);
   static const int kOffsets[7][3] = {{0, 0, 0}, {-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Matrix3d sum2 = Eigen::Matrix3d::Zero();
@@ -193,10 +199,21 @@ void VoxelMap::add(const std::vector<Eigen::Vector3f>& points, const Eigen::Vect
   }
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  // A normal uses the face neighbours' points too: refresh those of the touched cells' neighbours.
+  std::vector<int32_t> refresh = touched;
+  static const int kFaces[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
   for (const int32_t c : touched) {
     classify(cells_[c]);
-    estimateNormal(cells_[c]);
+    int x, y, z;
+    decode(cells_[c].key, x, y, z);
+    for (const auto& o : kFaces) {
+      const int32_t n = findCell(x + o[0], y + o[1], z + o[2]);
+      if (n >= 0) refresh.push_back(n);
+    }
   }
+  std::sort(refresh.begin(), refresh.end());
+  refresh.erase(std::unique(refresh.begin(), refresh.end()), refresh.end());
+  for (const int32_t c : refresh) estimateNormal(cells_[c]);
 }
 
 bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,

@@ -48,7 +48,9 @@ class VoxelMap {
 
  private:
   using Key = int64_t;
-  Key key(int x, int y, int z) const;
+  static Key key(int x, int y, int z);
+  /// The voxel coordinates of a key(x, y, z): the inverse of key().
+  static void decode(Key k, int& x, int& y, int& z);
   double voxel_;
   int max_per_voxel_;
   float min_spacing2_;
@@ -77,7 +79,9 @@ class VoxelMap {
     void push(const Eigen::Vector3f& p, const Eigen::Vector3f& view);
   };
   static void classify(Cell& cell);
-  /// Cell::normal and Cell::planar from the points of the cell and its 6 face neighbours.
+  /// Cell::normal and Cell::planar from the points of the cell and its 6 face neighbours. add()
+  /// refreshes them for every cell it touched and for those cells' face neighbours, so a voxel's
+  /// normal is the same whether its neighbours' points came in the same scan or a later one.
   void estimateNormal(Cell& cell) const;
 
   /// 4x4x4 voxels: which of them hold points (bit (x & 3) | (y & 3) << 2 | (z & 3) << 4) and their
