@@ -58,6 +58,7 @@ class FakeSystem : public RobotSystem {
   std::vector<Eigen::Vector2d> home_via;  ///< landmarks (scan_at) of the way back before its target
   Eigen::Vector2d goal_offset = Eigen::Vector2d::Zero();  ///< the way back's target = goal + this
   bool fail_goal_plans = false;                           ///< every plan with a goal fails
+  bool goal_runs_away = false;  ///< the way back's target = the robot's position + goal_offset (never reached)
   size_t scans_at_first_goal = 0;                         ///< registered scans when the way back was first planned
   int plan_failures_left = 0;
   bool always_fail_plan = false;
@@ -173,7 +174,7 @@ class FakeSystem : public RobotSystem {
       }
       r.complete = done == targets.size();
       if (r.complete) r.complete_reason = "no reachable cell borders unknown space";
-      r.target = *goal + goal_offset;
+      r.target = (goal_runs_away ? here : *goal) + goal_offset;
       for (const auto& w : home_via) {
         r.waypoints.push_back(w);
         r.scan_at.push_back(true);
@@ -317,7 +318,7 @@ TEST(Mission, HomeScanTravelSpacesTheScansOnTheWayBack) {
   }
 }
 
-TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackOrItNeverArrives) {
+TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackTheStartIsUnreachableOrItNeverArrives) {
   const auto hasEvent = [](const MissionState& s, const std::string& text) {
     for (const auto& e : s.events)
       if (e.what.find(text) != std::string::npos) return true;
@@ -338,11 +339,29 @@ TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackOrItNeverArrives) {
     EXPECT_EQ(sys.goals.size(), 1u + c.max_step_retries);  // one plan, retried
     EXPECT_TRUE(hasEvent(s, "no way back to the start")) << s.events.back().what;
   }
-  {  // The way back always ends 1 m from the start (nearest reachable cell): 3 plans, then the end.
+  {  // The start is not reachable: the way back ends 1 m from it (the nearest reachable cell). Once
+     // the robot stands there, the next plan of the way back ends the mission.
     TempDir dir;
     FakeSystem sys;
     sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
     sys.goal_offset = Eigen::Vector2d(1.0, 0.0);
+    MissionConfig c = config(dir.path());
+    c.return_home = true;
+    Mission m(c, sys, quiet, quiet);
+    EXPECT_EQ(m.run(), State::Done);
+    const MissionState s = m.snapshot();
+    EXPECT_TRUE(s.complete);
+    EXPECT_EQ(sys.goals.size(), 2u);
+    EXPECT_EQ(s.scans.size(), 4u);  // start, two targets, the end of the way back
+    EXPECT_TRUE(hasEvent(s, "is not reachable in the map; the robot is at the reachable cell nearest to it"))
+        << s.events.back().what;
+  }
+  {  // The way back never arrives anywhere (its target moves on each time): 3 plans, then the end.
+    TempDir dir;
+    FakeSystem sys;
+    sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
+    sys.goal_offset = Eigen::Vector2d(1.0, 0.0);
+    sys.goal_runs_away = true;
     MissionConfig c = config(dir.path());
     c.return_home = true;
     Mission m(c, sys, quiet, quiet);
