@@ -446,6 +446,21 @@ cv::Point clearTarget(const cv::Mat& sq_dt, const cv::Mat& allowed, const cv::Po
   return best;
 }
 
+namespace {
+/// Clears the cells of `cells` whose 8-connected region of `regions` (CV_8U, nonzero = in a region)
+/// has a bounding box smaller than min_extent_cells in both directions.
+void clearSmallRegions(cv::Mat& cells, const cv::Mat& regions, double min_extent_cells) {
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(regions, labels, stats, centroids, 8, CV_32S);
+  std::vector<uint8_t> keep(n, 0);
+  for (int l = 1; l < n; ++l)
+    keep[l] = std::max(stats.at<int>(l, cv::CC_STAT_WIDTH), stats.at<int>(l, cv::CC_STAT_HEIGHT)) >= min_extent_cells;
+  for (int r = 0; r < cells.rows; ++r)
+    for (int c = 0; c < cells.cols; ++c)
+      if (cells.at<uint8_t>(r, c) && !keep[labels.at<int>(r, c)]) cells.at<uint8_t>(r, c) = 0;
+}
+}  // namespace
+
 cv::Mat frontierCells(const cv::Mat& states, double min_unknown_cells, bool ignore_wall_base) {
   // Floor cells that may border a frontier: all, or those with no obstacle among their 8 neighbours.
   cv::Mat source = states == kFloor;
@@ -467,17 +482,8 @@ cv::Mat frontierCells(const cv::Mat& states, double min_unknown_cells, bool igno
         }
       }
     }
-  if (min_unknown_cells > 1.0) {
-    // Enclosed unknown pockets (bounding box smaller than min_unknown_cells both ways) do not count.
-    cv::Mat labels, stats, centroids;
-    const int n = cv::connectedComponentsWithStats(states == kUnknown, labels, stats, centroids, 8, CV_32S);
-    std::vector<uint8_t> keep(n, 0);
-    for (int l = 1; l < n; ++l)
-      keep[l] = std::max(stats.at<int>(l, cv::CC_STAT_WIDTH), stats.at<int>(l, cv::CC_STAT_HEIGHT)) >= min_unknown_cells;
-    for (int r = 0; r < f.rows; ++r)
-      for (int c = 0; c < f.cols; ++c)
-        if (f.at<uint8_t>(r, c) && !keep[labels.at<int>(r, c)]) f.at<uint8_t>(r, c) = 0;
-  }
+  // Enclosed unknown pockets (bounding box smaller than min_unknown_cells both ways) do not count.
+  if (min_unknown_cells > 1.0) clearSmallRegions(f, states == kUnknown, min_unknown_cells);
   return f;
 }
 
@@ -520,18 +526,9 @@ cv::Mat occludedFrontier(const cv::Mat& states, const GridGeometry& g, const std
         }
       }
     }
-  if (min_extent_cells > 1.0) {
-    // Short frontier pieces (8-connected pieces of the whole frontier, so that a shadow edge the
-    // grid traversal calls partly seen stays one piece) do not count.
-    cv::Mat labels, stats, centroids;
-    const int n = cv::connectedComponentsWithStats(frontier, labels, stats, centroids, 8, CV_32S);
-    std::vector<uint8_t> keep(n, 0);
-    for (int l = 1; l < n; ++l)
-      keep[l] = std::max(stats.at<int>(l, cv::CC_STAT_WIDTH), stats.at<int>(l, cv::CC_STAT_HEIGHT)) >= min_extent_cells;
-    for (int r = 0; r < occluded.rows; ++r)
-      for (int c = 0; c < occluded.cols; ++c)
-        if (occluded.at<uint8_t>(r, c) && !keep[labels.at<int>(r, c)]) occluded.at<uint8_t>(r, c) = 0;
-  }
+  // Short frontier pieces (8-connected pieces of the whole frontier, so that a shadow edge the
+  // grid traversal calls partly seen stays one piece) do not count.
+  if (min_extent_cells > 1.0) clearSmallRegions(occluded, frontier, min_extent_cells);
   return occluded;
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <thread>
 
@@ -319,59 +320,47 @@ TEST(Mission, HomeScanTravelSpacesTheScansOnTheWayBack) {
 }
 
 TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackTheStartIsUnreachableOrItNeverArrives) {
-  const auto hasEvent = [](const MissionState& s, const std::string& text) {
-    for (const auto& e : s.events)
-      if (e.what.find(text) != std::string::npos) return true;
-    return false;
+  // Explores two targets with return_home, the fake's way back set up by `setup`; returns the final
+  // state, the goals the way back was planned to, and whether an event contains `text`.
+  struct End {
+    MissionState state;
+    size_t goal_plans = 0;
+    bool warned = false;
   };
-  {  // Every plan of the way back fails: the exploration is kept, the mission ends Done.
+  const auto runWith = [](const std::function<void(FakeSystem&)>& setup, const std::string& text) {
     TempDir dir;
     FakeSystem sys;
     sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
-    sys.fail_goal_plans = true;
+    setup(sys);
     MissionConfig c = config(dir.path());
     c.return_home = true;
     Mission m(c, sys, quiet, quiet);
     EXPECT_EQ(m.run(), State::Done);
-    const MissionState s = m.snapshot();
-    EXPECT_TRUE(s.complete);
-    EXPECT_EQ(s.scans.size(), 3u);                          // start and the two targets
-    EXPECT_EQ(sys.goals.size(), 1u + c.max_step_retries);  // one plan, retried
-    EXPECT_TRUE(hasEvent(s, "no way back to the start")) << s.events.back().what;
-  }
-  {  // The start is not reachable: the way back ends 1 m from it (the nearest reachable cell). Once
-     // the robot stands there, the next plan of the way back ends the mission.
-    TempDir dir;
-    FakeSystem sys;
-    sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
-    sys.goal_offset = Eigen::Vector2d(1.0, 0.0);
-    MissionConfig c = config(dir.path());
-    c.return_home = true;
-    Mission m(c, sys, quiet, quiet);
-    EXPECT_EQ(m.run(), State::Done);
-    const MissionState s = m.snapshot();
-    EXPECT_TRUE(s.complete);
-    EXPECT_EQ(sys.goals.size(), 2u);
-    EXPECT_EQ(s.scans.size(), 4u);  // start, two targets, the end of the way back
-    EXPECT_TRUE(hasEvent(s, "is not reachable in the map; the robot is at the reachable cell nearest to it"))
-        << s.events.back().what;
-  }
-  {  // The way back never arrives anywhere (its target moves on each time): 3 plans, then the end.
-    TempDir dir;
-    FakeSystem sys;
-    sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
-    sys.goal_offset = Eigen::Vector2d(1.0, 0.0);
-    sys.goal_runs_away = true;
-    MissionConfig c = config(dir.path());
-    c.return_home = true;
-    Mission m(c, sys, quiet, quiet);
-    EXPECT_EQ(m.run(), State::Done);
-    const MissionState s = m.snapshot();
-    EXPECT_TRUE(s.complete);
-    EXPECT_EQ(sys.goals.size(), 3u);
-    EXPECT_EQ(s.scans.size(), 6u);  // start, two targets, three ends of the way back
-    EXPECT_TRUE(hasEvent(s, "did not get back to the start")) << s.events.back().what;
-  }
+    End end{m.snapshot(), sys.goals.size(), false};
+    for (const auto& e : end.state.events) end.warned = end.warned || e.what.find(text) != std::string::npos;
+    EXPECT_TRUE(end.state.complete);
+    EXPECT_TRUE(end.warned) << "no event with '" << text << "'; last: " << end.state.events.back().what;
+    return end;
+  };
+  // Every plan of the way back fails: the exploration is kept, the mission ends Done.
+  const End failed = runWith([](FakeSystem& s) { s.fail_goal_plans = true; }, "no way back to the start");
+  EXPECT_EQ(failed.state.scans.size(), 3u);                          // start and the two targets
+  EXPECT_EQ(failed.goal_plans, 1u + MissionConfig().max_step_retries);  // one plan, retried
+  // The start is not reachable: the way back ends 1 m from it (the nearest reachable cell). Once the
+  // robot stands there, the next plan of the way back ends the mission.
+  const End unreachable = runWith([](FakeSystem& s) { s.goal_offset = Eigen::Vector2d(1.0, 0.0); },
+                                  "is not reachable in the map; the robot is at the reachable cell nearest to it");
+  EXPECT_EQ(unreachable.goal_plans, 2u);
+  EXPECT_EQ(unreachable.state.scans.size(), 4u);  // start, two targets, the end of the way back
+  // The way back never arrives anywhere (its target moves on each time): 3 plans, then the end.
+  const End never = runWith(
+      [](FakeSystem& s) {
+        s.goal_offset = Eigen::Vector2d(1.0, 0.0);
+        s.goal_runs_away = true;
+      },
+      "did not get back to the start");
+  EXPECT_EQ(never.goal_plans, 3u);
+  EXPECT_EQ(never.state.scans.size(), 6u);  // start, two targets, three ends of the way back
 }
 
 TEST(Mission, StraightMotionsNeverExceedDMax) {
