@@ -378,8 +378,9 @@ TEST(Plan, TargetClearanceKeepsTheTargetOffTheWalls) {
       for (int row = 0; row < r.sq_dt.rows; ++row)
         for (int col = 0; col < r.sq_dt.cols; ++col)
           if (std::hypot(col - r.target_cell.x, row - r.target_cell.y) * res <= 0.5 &&
-              r.cost_map.predecessor.at<int>(row, col) >= 0)
+              r.cost_map.predecessor.at<int>(row, col) >= 0) {
             EXPECT_LT(std::sqrt(r.sq_dt.at<int>(row, col)) * res, 0.5) << name;
+          }
     }
     std::printf("%s: argmax clearance %.2f m -> %.2f m (moved %.2f m)\n", name, plain_clearance, clearance,
                 r.target_moved_m);

@@ -199,21 +199,14 @@ void VoxelMap::add(const std::vector<Eigen::Vector3f>& points, const Eigen::Vect
   }
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-  // A normal uses the face neighbours' points too: refresh those of the touched cells' neighbours.
-  std::vector<int32_t> refresh = touched;
-  static const int kFaces[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+  // Only the touched voxels get a new normal, from the points their neighbours hold now; a
+  // neighbour's normal is not refreshed when this scan adds to it. Refreshing them was tried: at
+  // 400 planes a little better, at 50 planes worse (the chaos rostest's run, seed 7: scan 4 off by
+  // 21.9 instead of 8.3 cm), as more sparse voxels got a normal that rejected good pairs.
   for (const int32_t c : touched) {
     classify(cells_[c]);
-    int x, y, z;
-    decode(cells_[c].key, x, y, z);
-    for (const auto& o : kFaces) {
-      const int32_t n = findCell(x + o[0], y + o[1], z + o[2]);
-      if (n >= 0) refresh.push_back(n);
-    }
+    estimateNormal(cells_[c]);
   }
-  std::sort(refresh.begin(), refresh.end());
-  refresh.erase(std::unique(refresh.begin(), refresh.end()), refresh.end());
-  for (const int32_t c : refresh) estimateNormal(cells_[c]);
 }
 
 bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,

@@ -152,43 +152,6 @@ TEST(VoxelMap, MarksHorizontalSurfaces) {
   EXPECT_FALSE(horizontal);  // wall
 }
 
-TEST(VoxelMap, ANormalIsTheSameWhetherItsNeighboursPointsCameInTheSameScanOrALaterOne) {
-  // A wall x = -0.05 across voxel coordinates -1 and 0. The first scan puts 6 points into voxel
-  // (-1, -1, -1), too few for a plane; the second fills its face neighbours (-1, 0, -1) and
-  // (-1, -1, 0). Then that voxel's normal comes from all of them, as in a map built in one go.
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<float> u(0.005f, 0.095f), noise(-0.002f, 0.002f);
-  const auto wallPatch = [&](int vy, int vz, int n) {
-    std::vector<Eigen::Vector3f> pts;
-    for (int i = 0; i < n; ++i) pts.emplace_back(-0.05f + noise(rng), vy * 0.1f + u(rng), vz * 0.1f + u(rng));
-    return pts;
-  };
-  const std::vector<Eigen::Vector3f> first = wallPatch(-1, -1, 6);
-  std::vector<Eigen::Vector3f> second = wallPatch(0, -1, 20);
-  const std::vector<Eigen::Vector3f> above = wallPatch(-1, 0, 20);
-  second.insert(second.end(), above.begin(), above.end());
-  std::vector<Eigen::Vector3f> all = first;
-  all.insert(all.end(), second.begin(), second.end());
-  const Eigen::Vector3f origin(1.0f, 0.0f, 0.0f);
-  VoxelMap in_two(0.1, 30), in_one(0.1, 30), first_only(0.1, 30);
-  in_two.add(first, &origin);
-  first_only.add(first, &origin);
-  in_two.add(second, &origin);
-  in_one.add(all, &origin);
-  const Eigen::Vector3f q(-0.05f, -0.05f, -0.05f);  // in voxel (-1, -1, -1)
-  Eigen::Vector3f out;
-  float d2;
-  Surface alone, two, one;
-  ASSERT_TRUE(first_only.nearest(q, 0.05, out, d2, nullptr, &alone));
-  EXPECT_FALSE(alone.planar);  // 6 points: no plane yet
-  ASSERT_TRUE(in_two.nearest(q, 0.05, out, d2, nullptr, &two));
-  ASSERT_TRUE(in_one.nearest(q, 0.05, out, d2, nullptr, &one));
-  EXPECT_TRUE(one.planar);
-  EXPECT_TRUE(two.planar);
-  EXPECT_GT(std::abs(two.normal.x()), 0.99f);
-  EXPECT_LT((two.normal - one.normal).norm(), 1e-6f);
-}
-
 /// `clusters` clusters of `per_cluster` points, centres uniform in [-extent, extent]^3, points
 /// uniform within +-spread of their centre (the same random sequence as drawing them inline).
 std::vector<Eigen::Vector3f> clusteredPoints(std::mt19937& rng, float extent, float spread, int clusters,

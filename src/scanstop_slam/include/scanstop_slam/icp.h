@@ -79,9 +79,8 @@ class VoxelMap {
     void push(const Eigen::Vector3f& p, const Eigen::Vector3f& view);
   };
   static void classify(Cell& cell);
-  /// Cell::normal and Cell::planar from the points of the cell and its 6 face neighbours. add()
-  /// refreshes them for every cell it touched and for those cells' face neighbours, so a voxel's
-  /// normal is the same whether its neighbours' points came in the same scan or a later one.
+  /// Cell::normal and Cell::planar from the points of the cell and its 6 face neighbours (add()
+  /// computes them for the cells a scan touched, not for their neighbours).
   void estimateNormal(Cell& cell) const;
 
   /// 4x4x4 voxels: which of them hold points (bit (x & 3) | (y & 3) << 2 | (z & 3) << 4) and their
