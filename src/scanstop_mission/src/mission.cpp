@@ -470,17 +470,6 @@ State Mission::run() {
         event("no way back to the start: " + plan.message + "; the mission ends here", true);
         break;
       }
-      if (plan.success && back && (plan.target - homeOf(now)).norm() > config_.home_tolerance_m &&
-          (plan.target - Eigen::Vector2d(now.estimate().x, now.estimate().y)).norm() <= config_.home_tolerance_m) {
-        // The start itself is not reachable in the map (e.g. a door closed by a phantom obstacle):
-        // the robot already stands at the reachable cell nearest to it.
-        event("the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) +
-                  ") is not reachable in the map; the robot is at the reachable cell nearest to it, (" +
-                  fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + "), " +
-                  fmt((plan.target - homeOf(now)).norm()) + " m from it; the mission ends here",
-              true);
-        break;
-      }
       if (!plan.success) return finish(State::Failed, "the explorer could not plan: " + plan.message);
       pending_plan_wall_s_ += plan.wall_time_s;
       {
@@ -494,6 +483,17 @@ State Mission::run() {
         std::lock_guard<std::mutex> lock(mutex_);
         state_.complete = true;
         state_.complete_reason = plan.complete_reason;
+      }
+      if (back && (plan.target - homeOf(now)).norm() > config_.home_tolerance_m &&
+          (plan.target - Eigen::Vector2d(now.estimate().x, now.estimate().y)).norm() <= config_.home_tolerance_m) {
+        // The start itself is not reachable in the map (e.g. a door closed by a phantom obstacle):
+        // the robot already stands at the reachable cell nearest to it.
+        event("the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) +
+                  ") is not reachable in the map; the robot is at the reachable cell nearest to it, (" +
+                  fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + "), " +
+                  fmt((plan.target - homeOf(now)).norm()) + " m from it; the mission ends here",
+              true);
+        break;
       }
       if (plan.complete && !back) {
         if (!config_.return_home || atHome(snapshot())) break;

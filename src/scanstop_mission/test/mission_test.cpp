@@ -352,6 +352,7 @@ TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackTheStartIsUnreachableOrItNever
                                   "is not reachable in the map; the robot is at the reachable cell nearest to it");
   EXPECT_EQ(unreachable.goal_plans, 2u);
   EXPECT_EQ(unreachable.state.scans.size(), 4u);  // start, two targets, the end of the way back
+  EXPECT_EQ(unreachable.state.plans, 5);  // two targets, "complete", two of the way back: the last counts too
   // The way back never arrives anywhere (its target moves on each time): 3 plans, then the end.
   const End never = runWith(
       [](FakeSystem& s) {
