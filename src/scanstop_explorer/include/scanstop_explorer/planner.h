@@ -44,11 +44,11 @@ struct PlannerConfig {
   bool ignore_wall_base_frontier = true;
   double start_snap_m = 0.5;           ///< robot off the accessible floor: join it within this distance [m], [0, 5]
   /// A chosen target (new scan location or goal) closer than this to a non-floor cell moves to the
-  /// nearest reached, not blacklisted cell at least this far from one, if there is one within
-  /// this distance of it; otherwise it stays (a door or narrow passage keeps its target). The path's landmarks lie on the skeleton, far from
-  /// walls; the last leg ends at the target, and a target right at the accessible border leaves
-  /// the robot robot_radius_m minus its own radius against the drift of that leg. 0: off (the
-  /// thesis' argmax as it is) [m], [0, 5]
+  /// nearest reached, not blacklisted cell at least this far from one, if there is one within this
+  /// distance of it; otherwise it stays (a door or narrow passage keeps its target). The path's
+  /// landmarks lie on the skeleton, far from walls; the last leg ends at the target, and a target
+  /// right at the accessible border leaves the robot robot_radius_m minus its own radius against
+  /// the drift of that leg. 0: off (the thesis' argmax as it is) [m], [0, 5]
   double target_clearance_m = 0.0;
   int max_coverage_landmarks = 2000;   ///< bound on the landmarks added for cells no landmark sees, [0, 1e6]
 
@@ -144,7 +144,7 @@ std::vector<std::pair<Eigen::Vector2d, int>> extractPath(const CostMap& cost_map
 /// no such cell is there (or clearance_cells <= 0).
 cv::Point clearTarget(const cv::Mat& sq_dt, const cv::Mat& allowed, const cv::Point& target, double clearance_cells);
 
-/// Frontier cells: unknown cells 4-adjacent to a floor cell. CV_8U 0/1. With min_unknown_cells > 0
+/// Frontier cells: unknown cells 4-adjacent to a floor cell. CV_8U 0/1. With min_unknown_cells > 1
 /// not those of an unknown region (8-connected) whose bounding box is smaller than that in both
 /// directions; with ignore_wall_base the floor neighbour must have no obstacle cell among its 8
 /// neighbours.
