@@ -287,6 +287,44 @@ TEST(Worlds, CommittedWorldsEqualAFreshBuildAndTheirStartsAreFree) {
   }
 }
 
+TEST(Worlds, ASofaArmOverhangsBareFloorInTheRobotsBand) {
+  // A sofa with its back to the north over [0, 2] x [0, 0.9]: its arms reach 0.12 m past the feet
+  // at both ends, between 0.3-0.5 m and 0.62 m, with nothing on the floor below.
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-3, -3, 5, 4);
+  b.sofa(0.0, 0.0, 2.0, 0.9, WorldBuilder::Side::North);
+  const World w = World::fromMesh(b.mesh(), "sofa");
+  // A beam 10 cm above the floor passes under the west arm's overhang (x = 0.05) ...
+  const Eigen::Vector3f down(0.0f, 1.0f, 0.0f);
+  EXPECT_GT(w.castRay(Eigen::Vector3f(0.05f, -1.0f, 0.1f), down, 10.0f), 3.0);
+  // ... and one at 0.55 m hits the arm's front face at y = 0.
+  EXPECT_NEAR(w.castRay(Eigen::Vector3f(0.05f, -1.0f, 0.55f), down, 10.0f), 1.0, 1e-3);
+  // The robot's band (0.03-0.6 m) holds the arm: the disc collides there.
+  EXPECT_TRUE(w.discCollides(Eigen::Vector2d(0.05, 0.45), 0.02));
+  // Its underside slopes: at 0.45 m a beam passes under the arm's outer edge (x = 0.01, bottom at
+  // ~0.49 m) but not under its inner edge (x = 0.17, bottom at ~0.32 m).
+  EXPECT_GT(w.castRay(Eigen::Vector3f(0.01f, -1.0f, 0.45f), down, 10.0f), 3.0);
+  EXPECT_LT(w.castRay(Eigen::Vector3f(0.17f, -1.0f, 0.45f), down, 10.0f), 1.5);
+}
+
+TEST(Worlds, FurnishedWorldsAreReproducibleVariedAndStartInFreeSpace) {
+  const WorldSpec a = furnishedWorld(7), again = furnishedWorld(7), other = furnishedWorld(8);
+  EXPECT_EQ(a.name, "furnished_7");
+  ASSERT_EQ(a.mesh.vertices.size(), again.mesh.vertices.size());
+  for (size_t i = 0; i < a.mesh.vertices.size(); ++i) ASSERT_EQ(a.mesh.vertices[i], again.mesh.vertices[i]);
+  EXPECT_TRUE(a.mesh.vertices.size() != other.mesh.vertices.size() || a.size_m != other.size_m);
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    const WorldSpec spec = furnishedWorld(seed);
+    const World w = World::fromMesh(spec.mesh, spec.name);
+    EXPECT_GT(w.floorTriangles(), 0u) << spec.name;
+    EXPECT_FALSE(w.discCollides(Eigen::Vector2d(spec.start.x, spec.start.y), SimConfig().robot_radius_m)) << spec.name;
+    EXPECT_NO_THROW(defaultStartPose(spec.name)) << spec.name;
+    // Furnished: several times the geometry of the bare walls of 4-6 rooms (about 25 boxes, 300 faces).
+    EXPECT_GT(spec.mesh.faces.size(), 700u) << spec.name;
+  }
+  EXPECT_THROW(defaultStartPose("furnished_x"), ConfigError);
+}
+
 TEST(Worlds, RealHouseLoadsAndScans) {
   SimConfig config;
   config.errors = makeProfile("thesis");
