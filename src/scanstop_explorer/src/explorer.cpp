@@ -1,9 +1,12 @@
 #include "scanstop_explorer/explorer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 #include "scanstop_common/config.h"
 
@@ -19,6 +22,7 @@ void ExplorerConfig::validate() const {
   requireInRange("progress_m", progress_m, 0.0, 10.0, "m");
   requireInRange("max_failed_attempts", max_failed_attempts, 1, 100);
   requireInRange("blacklist_radius_m", blacklist_radius_m, 1e-6, 10.0, "m");
+  requireInRange("contact_radius_m", contact_radius_m, 1e-6, 2.0, "m");
 }
 
 Explorer::Explorer(const ExplorerConfig& config) : config_(config), floor_(config.floor) { config_.validate(); }
@@ -66,6 +70,14 @@ void Explorer::blacklist(const Eigen::Vector2d& center_map, double radius_m) {
   blacklist_.emplace_back(center_map, radius_m);
 }
 
+bool Explorer::addContact(const Eigen::Vector2d& point_map) {
+  if (!point_map.allFinite()) return false;
+  for (const auto& c : contacts_)
+    if ((c - point_map).norm() < 0.01) return false;
+  contacts_.push_back(point_map);
+  return true;
+}
+
 bool Explorer::markUnreachable(const Eigen::Vector2d& target_map) {
   if (!target_map.allFinite()) return false;
   for (const auto& b : blacklist_)
@@ -80,6 +92,12 @@ PlanResult Explorer::plan(const Pose2D& T_map_base, const std::optional<Eigen::V
   PlanInput input;
   input.states = floor_.states();
   input.geometry = floor_.geometry();
+  // Contacts: obstacles whatever the scans show (what the robot touched was not seen well).
+  for (const Eigen::Vector2d& c : contacts_) {
+    const cv::Point cell = input.geometry.cellOf(c.x(), c.y());
+    const int r = std::max(1, static_cast<int>(std::lround(config_.contact_radius_m / input.geometry.resolution)));
+    if (!input.states.empty()) cv::circle(input.states, cell, r, cv::Scalar(kObstacle), cv::FILLED);
+  }
   input.scan_positions = scanPositions();
   input.robot = T_map_base;
   const double floor_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

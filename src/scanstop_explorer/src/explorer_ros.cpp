@@ -71,6 +71,7 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "progress_m", c.progress_m);
   optional(pnh, "max_failed_attempts", c.max_failed_attempts);
   optional(pnh, "blacklist_radius_m", c.blacklist_radius_m);
+  optional(pnh, "contact_radius_m", c.contact_radius_m);
   for (const std::string& name : ros_params::unknownParameters(pnh, known))
     ROS_WARN("explorer_node: ignoring unknown parameter '%s' (a typo? the names carry their unit, e.g. k_r_m)",
              name.c_str());
@@ -125,16 +126,23 @@ std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, cons
     out << "unreachable has " << req.unreachable.size() << " points, more than max_unreachable " << c.max_unreachable;
     return out.str();
   }
-  for (size_t i = 0; i < req.unreachable.size(); ++i) {
-    const geometry_msgs::Point& u = req.unreachable[i];
-    if (!std::isfinite(u.x) || !std::isfinite(u.y) || !std::isfinite(u.z)) {
-      out << "unreachable[" << i << "] (" << u.x << ", " << u.y << ", " << u.z << ") is not finite";
-      return out.str();
-    }
-    if (std::hypot(u.x, u.y) > c.max_coordinate_m) {
-      out << "unreachable[" << i << "] (" << u.x << ", " << u.y << ") is beyond max_coordinate_m "
-          << c.max_coordinate_m << " m from the map origin";
-      return out.str();
+  if (req.contacts.size() > static_cast<size_t>(c.max_unreachable)) {
+    out << "contacts has " << req.contacts.size() << " points, more than max_unreachable " << c.max_unreachable;
+    return out.str();
+  }
+  for (const auto* list : {&req.unreachable, &req.contacts}) {
+    const char* name = list == &req.unreachable ? "unreachable" : "contacts";
+    for (size_t i = 0; i < list->size(); ++i) {
+      const geometry_msgs::Point& u = (*list)[i];
+      if (!std::isfinite(u.x) || !std::isfinite(u.y) || !std::isfinite(u.z)) {
+        out << name << "[" << i << "] (" << u.x << ", " << u.y << ", " << u.z << ") is not finite";
+        return out.str();
+      }
+      if (std::hypot(u.x, u.y) > c.max_coordinate_m) {
+        out << name << "[" << i << "] (" << u.x << ", " << u.y << ") is beyond max_coordinate_m "
+            << c.max_coordinate_m << " m from the map origin";
+        return out.str();
+      }
     }
   }
   return "";
@@ -231,6 +239,9 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
   for (const geometry_msgs::Point& u : req.unreachable)
     if (explorer_->markUnreachable(Eigen::Vector2d(u.x, u.y)))
       ROS_INFO("explorer_node: target (%.2f, %.2f) blacklisted as unreachable by the caller", u.x, u.y);
+  for (const geometry_msgs::Point& p : req.contacts)
+    if (explorer_->addContact(Eigen::Vector2d(p.x, p.y)))
+      ROS_WARN("explorer_node: contact at (%.2f, %.2f) reported by the caller: an obstacle from now on", p.x, p.y);
   const PlanResult r =
       explorer_->plan(robot, req.to_goal ? std::optional<Eigen::Vector2d>(Eigen::Vector2d(req.goal.x, req.goal.y))
                                          : std::nullopt);

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -195,6 +197,33 @@ TEST(Explorer, TargetsReportedUnreachableAreNeverChosenAgain) {
   ASSERT_TRUE(b.success && !b.complete) << b.message;
   EXPECT_GT((b.target - a.target).norm(), ex.config().blacklist_radius_m);
   EXPECT_EQ(b.blacklist.at<uint8_t>(b.geometry.cellOf(a.target.x(), a.target.y())), 1);
+}
+
+TEST(Explorer, AContactIsAnObstacleNoLaterPathPasses) {
+  // Two rooms: the first plan leads towards the door. A contact in the middle of its first leg
+  // (something the scans did not show) makes every later path keep the robot radius off it.
+  const test::Scene s = test::twoRooms();
+  Explorer ex;
+  ex.addScan(0, Pose2D(1.0, 1.0, 0.0), test::simulateScan(s, {1.0, 1.0}, 3.0));
+  const PlanResult a = ex.plan(Pose2D(1.0, 1.0, 0.0));
+  ASSERT_TRUE(a.success && !a.complete) << a.message;
+  ASSERT_GE(a.path.size(), 2u);
+  const Eigen::Vector2d contact = 0.5 * (a.path[0] + a.path[1]);
+  EXPECT_TRUE(ex.addContact(contact));
+  EXPECT_FALSE(ex.addContact(contact + Eigen::Vector2d(0.005, 0.0)));  // the caller's whole list again
+  EXPECT_FALSE(ex.addContact(Eigen::Vector2d(std::nan(""), 0.0)));
+  ASSERT_EQ(ex.contacts().size(), 1u);
+  const PlanResult b = ex.plan(Pose2D(1.0, 1.0, 0.0));
+  ASSERT_TRUE(b.success && !b.complete) << b.message;
+  ASSERT_GE(b.path.size(), 2u);
+  EXPECT_EQ(b.states.at<uint8_t>(b.geometry.cellOf(contact.x(), contact.y())), kObstacle);
+  // The contact cell is not accessible, and no leg of the new path comes nearer than the robot radius.
+  EXPECT_EQ(b.accessible.at<uint8_t>(b.geometry.cellOf(contact.x(), contact.y())), 0);
+  for (size_t i = 1; i < b.path.size(); ++i) {
+    const Eigen::Vector2d p = b.path[i - 1], q = b.path[i];
+    const double t = std::clamp((contact - p).dot(q - p) / std::max(1e-12, (q - p).squaredNorm()), 0.0, 1.0);
+    EXPECT_GT((p + t * (q - p) - contact).norm(), ex.config().planner.robot_radius_m) << "leg " << i;
+  }
 }
 
 TEST(Explorer, ProgressTowardsTheTargetIsNotAFailure) {

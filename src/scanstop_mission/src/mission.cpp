@@ -39,6 +39,9 @@ void MissionConfig::validate() const {
   requireInRange("waypoint_tolerance", waypoint_tolerance_m, 0.0, 1.0, "m");
   requireInRange("heading_tolerance", heading_tolerance_rad, 0.0, 0.5, "rad");
   requireInRange("max_step_retries", max_step_retries, 0, 100);
+  requireInRange("contact_backoff", contact_backoff_m, 0.0, 1.0, "m");
+  requireInRange("contact_offset", contact_offset_m, 0.0, 2.0, "m");
+  requireInRange("max_contacts", max_contacts, 1, 1000);
   requireInRange("retry_backoff", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
   requireInRange("max_cycles", max_cycles, 1, 1000000);
@@ -103,6 +106,24 @@ bool Mission::loadSavedState() {
     state_.odom_now = *odom;
   }
   return true;
+}
+
+void Mission::adoptCurrentPoses() {
+  const std::vector<std::pair<int, Pose2D>> poses = robot_.registeredScanPoses();
+  if (poses.empty()) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  size_t k = 0;  // both lists are sorted by scan index
+  for (ScanRecord& r : state_.scans) {
+    while (k < poses.size() && poses[k].first < r.index) ++k;
+    if (k == poses.size()) break;
+    if (poses[k].first != r.index) continue;
+    const Pose2D& p = poses[k].second;
+    // poses.csv holds rounded figures: a difference below a micrometre is no relaxation.
+    if (std::hypot(p.x - r.map_pose.x, p.y - r.map_pose.y) < 1e-6 && std::abs(normalizeAngle(p.yaw - r.map_pose.yaw)) < 1e-6)
+      continue;
+    if (!r.registered_pose) r.registered_pose = r.map_pose;
+    r.map_pose = p;
+  }
 }
 
 void Mission::adoptScansRegisteredElsewhere(int upto) {
@@ -360,27 +381,21 @@ bool Mission::driveTo(const Eigen::Vector2d& waypoint, bool& collision) {
     const double turn = normalizeAngle(std::atan2(delta.y(), delta.x()) - est.yaw);
     if (std::abs(turn) > config_.heading_tolerance_rad) {
       const MotionResult r = robot_.rotate(turn);
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        state_.modelled_time_s += r.duration_s;
-        if (r.success || r.collision) state_.odom_now = r.odom_pose;
-      }
+      noteMotion(r, false);
       if (!r.success || r.collision) {
         collision = r.collision;
         event("rotation by " + fmt(turn * 180.0 / M_PI, 1) + " deg failed: " + r.message, true);
+        if (collision) escapeContact(0, "rotation");
         return false;
       }
     }
     const double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
     const MotionResult r = robot_.forward(step);
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      state_.modelled_time_s += r.duration_s;
-      if (r.success || r.collision) state_.odom_now = r.odom_pose;
-    }
+    noteMotion(r, true);
     if (r.collision) {
       collision = true;
       event("collision after " + fmt(r.achieved) + " of " + fmt(step) + " m: " + r.message, true);
+      escapeContact(1, "forward motion");
       return false;
     }
     if (!r.success) {
@@ -393,6 +408,53 @@ bool Mission::driveTo(const Eigen::Vector2d& waypoint, bool& collision) {
   return false;
 }
 
+void Mission::noteMotion(const MotionResult& r, bool leg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  state_.modelled_time_s += r.duration_s;
+  if (r.success || r.collision) state_.odom_now = r.odom_pose;
+  if (!r.true_clearance_m) return;
+  const double c = *r.true_clearance_m;
+  ++state_.clearance_motions;
+  if (state_.min_clearance_m < 0.0 || c < state_.min_clearance_m) state_.min_clearance_m = c;
+  if (!leg) return;
+  ++state_.clearance_legs;
+  if (c < MissionConfig::kCloseLeg) ++state_.close_legs;
+}
+
+void Mission::escapeContact(int sign, const std::string& what) {
+  const Pose2D est = snapshot().estimate();
+  if (sign != 0) {
+    const Eigen::Vector2d contact(est.x + sign * config_.contact_offset_m * std::cos(est.yaw),
+                                  est.y + sign * config_.contact_offset_m * std::sin(est.yaw));
+    size_t n = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      state_.contacts.push_back(contact);
+      n = state_.contacts.size();
+    }
+    event("contact " + std::to_string(n) + " of at most " + std::to_string(config_.max_contacts) + " at (" +
+              fmt(contact.x()) + ", " + fmt(contact.y()) + ") on a " + what +
+              ": an obstacle for every later plan",
+          true);
+  }
+  if (config_.contact_backoff_m <= 0.0) return;
+  const double back = sign < 0 ? config_.contact_backoff_m : -config_.contact_backoff_m;
+  const MotionResult r = robot_.forward(back);
+  noteMotion(r, true);
+  if (r.success && !r.collision)
+    event("backed off by " + fmt(std::abs(r.achieved)) + " m after the contact");
+  else
+    event("backing off by " + fmt(std::abs(back)) + " m after the contact failed after " + fmt(std::abs(r.achieved)) +
+              " m: " + r.message,
+          true);
+  save();
+}
+
+bool Mission::contactBoundReached() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return static_cast<int>(state_.contacts.size()) >= config_.max_contacts;
+}
+
 State Mission::run() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -402,6 +464,7 @@ State Mission::run() {
   info_("mission started in " + config_.run_dir + " (" + std::to_string(config_.planes) + " planes per scan" +
         (config_.max_scans > 0 ? ", at most " + std::to_string(config_.max_scans) + " scans" : std::string()) + ")");
   const auto finish = [this](State s, const std::string& why) {
+    adoptCurrentPoses();  // the report's trajectory and errors use the poses as finally optimized
     setState(s);
     event(std::string("mission ") + toString(s) + ": " + why, s == State::Failed);
     save();
@@ -414,6 +477,7 @@ State Mission::run() {
 
   int failed_cycles = 0;
   int home_plans = 0;  // plans of the way back to the start (bounded: the start may have become unreachable)
+  std::string safety_stop;  // set when max_contacts is reached: the mission ends Failed with this reason
   const auto homeOf = [](const MissionState& s) {
     return Eigen::Vector2d(s.scans.front().map_pose.x, s.scans.front().map_pose.y);
   };
@@ -462,7 +526,7 @@ State Mission::run() {
       if (back) ++home_plans;
       for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
         backoff(attempt);
-        plan = robot_.planNext(now.estimate(), now.unreachable, goal);
+        plan = robot_.planNext(now.estimate(), now.unreachable, now.contacts, goal);
         if (plan.success) break;
         event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
       }
@@ -555,6 +619,14 @@ State Mission::run() {
           state_.unreachable.push_back(plan.target);
         }
         setPath(plan.waypoints.size(), -1);
+        if (collision && contactBoundReached()) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          safety_stop = "safety stop: " + std::to_string(state_.contacts.size()) +
+                        " contacts (max_contacts " + std::to_string(config_.max_contacts) +
+                        "); the map so far is kept";
+          state_.complete_reason = safety_stop;
+          break;
+        }
         event("target (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) +
                   ") marked unreachable; scanning here to re-localize, then replanning",
               true);
@@ -580,6 +652,7 @@ State Mission::run() {
     }
     setPath(plan.waypoints.size(), -1);
     save();
+    if (!safety_stop.empty()) break;
     failed_cycles = snapshot().scans.size() > scans_before ? 0 : failed_cycles + 1;
   }
 
@@ -604,6 +677,7 @@ State Mission::run() {
     else
       event("meshing failed: " + mesh.message, true);
   }
+  if (!safety_stop.empty()) return finish(State::Failed, safety_stop);
   return finish(State::Done, end.complete ? "exploration complete: " + end.complete_reason : end.complete_reason);
 }
 

@@ -50,6 +50,9 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "home_tolerance", config_.home_tolerance_m);
   ros_params::optional(pnh, "home_scan_travel", config_.home_scan_travel_m);
   ros_params::optional(pnh, "max_step_retries", config_.max_step_retries);
+  ros_params::optional(pnh, "contact_backoff", config_.contact_backoff_m);
+  ros_params::optional(pnh, "contact_offset", config_.contact_offset_m);
+  ros_params::optional(pnh, "max_contacts", config_.max_contacts);
   ros_params::optional(pnh, "retry_backoff", config_.retry_backoff_s);
   ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
   ros_params::optional(pnh, "build_mesh", config_.build_mesh);
@@ -94,7 +97,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   // A misspelt parameter would silently keep its default: refuse it.
   const std::vector<std::string> unknown = ros_params::unknownParameters(
       pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
-            "return_home", "home_tolerance", "home_scan_travel", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
+            "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
             "robot_radius", "explorer_ns"});
@@ -103,7 +106,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
     throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
                       "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, return_home, home_tolerance, home_scan_travel, "
-                      "max_step_retries, "
+                      "contact_backoff, contact_offset, max_contacts, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
                       "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns");
   }
@@ -203,6 +206,9 @@ void MissionNode::runMission() {
     out << std::fixed << std::setprecision(1) << "mission " << toString(end) << ": " << s.scans << " scans, coverage "
         << s.coverage * 100.0 << " %, " << s.collisions << " collisions, " << s.elapsed_s << " s";
     if (truth) out << " (" << truth->coverage * 100.0 << " % of the truly reachable floor)";
+    if (s.ate_scans > 0)
+      out << std::setprecision(1) << ", pose error over all scans RMS " << s.ate_rms_m * 100.0 << " cm, max "
+          << s.ate_max_m * 100.0 << " cm (odometry alone RMS " << s.odom_ate_rms_m * 100.0 << " cm)";
     if (s.has_ground_truth)
       out << std::setprecision(1) << ", final pose error " << s.slam_error_m * 100.0 << " cm (odometry alone "
           << s.odom_error_m * 100.0 << " cm)";

@@ -75,6 +75,7 @@ void MissionState::save(const std::string& path) const {
     YAML::Node n;
     n["index"] = s.index;
     n["map_pose"] = poseNode(s.map_pose);
+    if (s.registered_pose) n["registered_pose"] = poseNode(*s.registered_pose);
     n["odom_pose"] = poseNode(s.odom_pose);
     if (s.true_pose) n["true_pose"] = poseNode(*s.true_pose);
     n["converged"] = s.converged;
@@ -96,6 +97,19 @@ void MissionState::save(const std::string& path) const {
     unreachable_list.push_back(n);
   }
   root["unreachable"] = unreachable_list;
+  YAML::Node contact_list(YAML::NodeType::Sequence);
+  for (const auto& c : contacts) {
+    YAML::Node n(YAML::NodeType::Sequence);
+    n.SetStyle(YAML::EmitterStyle::Flow);
+    n.push_back(c.x());
+    n.push_back(c.y());
+    contact_list.push_back(n);
+  }
+  root["contacts"] = contact_list;
+  root["clearance_motions"] = clearance_motions;
+  root["clearance_legs"] = clearance_legs;
+  root["close_legs"] = close_legs;
+  root["min_clearance_m"] = min_clearance_m;
   YAML::Node event_list(YAML::NodeType::Sequence);
   for (const auto& e : events) {
     YAML::Node n;
@@ -133,6 +147,7 @@ MissionState MissionState::load(const std::string& path) {
       ScanRecord s;
       s.index = n["index"].as<int>();
       s.map_pose = poseOf(n["map_pose"]);
+      if (n["registered_pose"]) s.registered_pose = poseOf(n["registered_pose"]);
       s.odom_pose = poseOf(n["odom_pose"]);
       if (n["true_pose"]) s.true_pose = poseOf(n["true_pose"]);
       s.converged = n["converged"].as<bool>(true);
@@ -158,6 +173,11 @@ MissionState MissionState::load(const std::string& path) {
       throw std::runtime_error("path_next " + std::to_string(m.path_next) + " is outside the path of " +
                                std::to_string(m.path.size()) + " waypoints");
     for (const YAML::Node& n : root["unreachable"]) m.unreachable.emplace_back(n[0].as<double>(), n[1].as<double>());
+    for (const YAML::Node& n : root["contacts"]) m.contacts.emplace_back(n[0].as<double>(), n[1].as<double>());
+    m.clearance_motions = root["clearance_motions"].as<int>(0);
+    m.clearance_legs = root["clearance_legs"].as<int>(0);
+    m.close_legs = root["close_legs"].as<int>(0);
+    m.min_clearance_m = root["min_clearance_m"].as<double>(-1.0);
     for (const YAML::Node& n : root["events"]) m.events.push_back({n["elapsed_s"].as<double>(), n["what"].as<std::string>()});
   } catch (const std::exception& e) {
     throw IoError(path, std::string("corrupt mission state: ") + e.what());

@@ -103,6 +103,32 @@ Summary summarize(const MissionState& st) {
     scan_sum += r.scan_time_s;
     if (!r.converged) ++s.unconverged_registrations;
   }
+  s.has_clearance = st.clearance_motions > 0 && st.min_clearance_m >= 0.0;
+  s.min_clearance_m = st.min_clearance_m;
+  s.clearance_legs = st.clearance_legs;
+  s.close_legs = st.close_legs;
+  double sum2 = 0.0, yaw2 = 0.0, odom2 = 0.0;
+  for (const ScanRecord& r : st.scans) {
+    if (!r.true_pose) continue;
+    const double e = std::hypot(r.map_pose.x - r.true_pose->x, r.map_pose.y - r.true_pose->y);
+    const double ey = yawErrorDeg(r.map_pose, *r.true_pose);
+    const double eo = std::hypot(r.odom_pose.x - r.true_pose->x, r.odom_pose.y - r.true_pose->y);
+    ++s.ate_scans;
+    sum2 += e * e;
+    yaw2 += ey * ey;
+    odom2 += eo * eo;
+    if (e > s.ate_max_m || s.ate_max_scan < 0) {
+      s.ate_max_m = e;
+      s.ate_max_scan = r.index;
+    }
+    s.ate_yaw_max_deg = std::max(s.ate_yaw_max_deg, ey);
+    s.odom_ate_max_m = std::max(s.odom_ate_max_m, eo);
+  }
+  if (s.ate_scans > 0) {
+    s.ate_rms_m = std::sqrt(sum2 / s.ate_scans);
+    s.ate_yaw_rms_deg = std::sqrt(yaw2 / s.ate_scans);
+    s.odom_ate_rms_m = std::sqrt(odom2 / s.ate_scans);
+  }
   if (!st.scans.empty()) {
     s.compute_per_cycle_mean_s = compute_sum / st.scans.size();
     s.scan_time_mean_s = scan_sum / st.scans.size();
@@ -129,6 +155,9 @@ std::string toJson(const Summary& s) {
       << "  \"true_coverage\": " << (s.has_true_coverage ? num(s.true_coverage) : "null") << ",\n"
       << "  \"true_reachable_floor_m2\": " << (s.has_true_coverage ? num(s.true_reachable_m2, 2) : "null") << ",\n"
       << "  \"collisions\": " << s.collisions << ",\n"
+      << "  \"min_clearance_m\": " << (s.has_clearance ? num(s.min_clearance_m) : "null") << ",\n"
+      << "  \"legs_measured\": " << (s.has_clearance ? std::to_string(s.clearance_legs) : "null") << ",\n"
+      << "  \"legs_closer_than_5cm\": " << (s.has_clearance ? std::to_string(s.close_legs) : "null") << ",\n"
       << "  \"complete\": " << (s.complete ? "true" : "false") << ",\n"
       << "  \"complete_reason\": " << quote(s.complete_reason) << ",\n"
       << "  \"ground_truth\": " << (s.has_ground_truth ? "true" : "false") << ",\n"
@@ -136,6 +165,14 @@ std::string toJson(const Summary& s) {
       << "  \"final_slam_error_yaw_deg\": " << (s.has_ground_truth ? num(s.slam_error_yaw_deg) : "null") << ",\n"
       << "  \"final_odometry_error_m\": " << (s.has_ground_truth ? num(s.odom_error_m) : "null") << ",\n"
       << "  \"final_odometry_error_yaw_deg\": " << (s.has_ground_truth ? num(s.odom_error_yaw_deg) : "null") << ",\n"
+      << "  \"ate_scans\": " << s.ate_scans << ",\n"
+      << "  \"ate_rms_m\": " << (s.ate_scans > 0 ? num(s.ate_rms_m) : "null") << ",\n"
+      << "  \"ate_max_m\": " << (s.ate_scans > 0 ? num(s.ate_max_m) : "null") << ",\n"
+      << "  \"ate_max_scan\": " << (s.ate_scans > 0 ? std::to_string(s.ate_max_scan) : "null") << ",\n"
+      << "  \"ate_yaw_rms_deg\": " << (s.ate_scans > 0 ? num(s.ate_yaw_rms_deg) : "null") << ",\n"
+      << "  \"ate_yaw_max_deg\": " << (s.ate_scans > 0 ? num(s.ate_yaw_max_deg) : "null") << ",\n"
+      << "  \"odometry_ate_rms_m\": " << (s.ate_scans > 0 ? num(s.odom_ate_rms_m) : "null") << ",\n"
+      << "  \"odometry_ate_max_m\": " << (s.ate_scans > 0 ? num(s.odom_ate_max_m) : "null") << ",\n"
       << "  \"unconverged_registrations\": " << s.unconverged_registrations << ",\n"
       << "  \"compute_per_cycle_mean_s\": " << num(s.compute_per_cycle_mean_s) << ",\n"
       << "  \"compute_per_cycle_max_s\": " << num(s.compute_per_cycle_max_s) << ",\n"
@@ -143,6 +180,37 @@ std::string toJson(const Summary& s) {
       << "  \"modelled_time_s\": " << num(s.modelled_time_s, 1) << ",\n"
       << "  \"elapsed_s\": " << num(s.elapsed_s, 1) << "\n"
       << "}\n";
+  return out.str();
+}
+
+std::string trajectoryCsv(const MissionState& st) {
+  std::ostringstream out;
+  out << "index,x,y,yaw,registered_x,registered_y,registered_yaw,odom_x,odom_y,odom_yaw,true_x,true_y,true_yaw,"
+         "error_m,error_yaw_deg,odom_error_m\n";
+  const auto pose = [&out](const std::optional<Pose2D>& p) {
+    if (p)
+      out << num(p->x, 6) << "," << num(p->y, 6) << "," << num(p->yaw, 6);
+    else
+      out << ",,";
+  };
+  for (const ScanRecord& r : st.scans) {
+    out << r.index << ",";
+    pose(r.map_pose);
+    out << ",";
+    pose(r.registered_pose.value_or(r.map_pose));
+    out << ",";
+    pose(r.odom_pose);
+    out << ",";
+    pose(r.true_pose);
+    out << ",";
+    if (r.true_pose)
+      out << num(std::hypot(r.map_pose.x - r.true_pose->x, r.map_pose.y - r.true_pose->y), 6) << ","
+          << num(yawErrorDeg(r.map_pose, *r.true_pose), 4) << ","
+          << num(std::hypot(r.odom_pose.x - r.true_pose->x, r.odom_pose.y - r.true_pose->y), 6);
+    else
+      out << ",,";
+    out << "\n";
+  }
   return out.str();
 }
 
@@ -155,6 +223,7 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
     s.true_reachable_m2 = truth->reachable_m2;
   }
   writeFileAtomic(run_dir + "/summary.json", toJson(s));
+  writeFileAtomic(run_dir + "/trajectory.csv", trajectoryCsv(st));
 
   // Coverage against scan count.
   {
@@ -207,6 +276,37 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
     writePng(run_dir + "/trajectory.png", c.img);
   }
 
+  // Position error of every scan against ground truth (simulation): SLAM and odometry alone.
+  if (s.ate_scans > 0) {
+    double top = 0.01;
+    for (const ScanRecord& r : st.scans)
+      if (r.true_pose)
+        top = std::max({top, std::hypot(r.map_pose.x - r.true_pose->x, r.map_pose.y - r.true_pose->y) * 100.0,
+                        std::min(std::hypot(r.odom_pose.x - r.true_pose->x, r.odom_pose.y - r.true_pose->y) * 100.0,
+                                 4.0 * std::max(1.0, s.ate_max_m * 100.0))});
+    Canvas c(640, 400, 0.0, std::max<double>(1.0, st.scans.size()), 0.0, top * 1.05, false);
+    c.axes("scan", "error [cm]", "Position error per scan: SLAM (blue), odometry (red)");
+    const auto draw = [&](bool slam, cv::Scalar color) {
+      std::optional<cv::Point> prev;
+      for (size_t i = 0; i < st.scans.size(); ++i) {
+        const ScanRecord& r = st.scans[i];
+        if (!r.true_pose) {
+          prev.reset();
+          continue;
+        }
+        const Pose2D& p = slam ? r.map_pose : r.odom_pose;
+        const double e = std::min(std::hypot(p.x - r.true_pose->x, p.y - r.true_pose->y) * 100.0, top * 1.05);
+        const cv::Point q = c.px(i + 1.0, e);
+        if (prev) cv::line(c.img, *prev, q, color, 2, cv::LINE_AA);
+        cv::circle(c.img, q, 3, color, cv::FILLED);
+        prev = q;
+      }
+    };
+    draw(false, cv::Scalar(40, 40, 220));
+    draw(true, cv::Scalar(200, 80, 0));
+    writePng(run_dir + "/pose_error.png", c.img);
+  }
+
   std::ostringstream md;
   md << "# Exploration report" << (s.world.empty() ? "" : ": " + s.world) << "\n\n"
      << "| figure | value |\n|---|---|\n"
@@ -218,7 +318,17 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
     md << "| coverage of the truly reachable floor (" << num(s.true_reachable_m2, 1) << " m2, from the world) | "
        << num(s.true_coverage * 100.0, 1) << " % |\n";
   md << "| collisions | " << s.collisions << " |\n"
+     << (s.has_clearance ? "| smallest true clearance of the body (all motions) | " + num(s.min_clearance_m * 100.0, 1) +
+                                " cm; " + std::to_string(s.close_legs) + " of " + std::to_string(s.clearance_legs) +
+                                " straight legs closer than 5 cm |\n"
+                          : std::string())
      << "| registrations that did not converge | " << s.unconverged_registrations << " |\n";
+  if (s.ate_scans > 0)
+    md << "| SLAM pose error over all " << s.ate_scans << " scans (ATE) | RMS " << num(s.ate_rms_m * 100.0, 1)
+       << " cm, max " << num(s.ate_max_m * 100.0, 1) << " cm (scan " << s.ate_max_scan << "); yaw RMS "
+       << num(s.ate_yaw_rms_deg, 2) << " deg, max " << num(s.ate_yaw_max_deg, 2) << " deg |\n"
+       << "| odometry-only error over all scans | RMS " << num(s.odom_ate_rms_m * 100.0, 1) << " cm, max "
+       << num(s.odom_ate_max_m * 100.0, 1) << " cm |\n";
   if (s.has_ground_truth) {
     md << "| final SLAM pose error | " << num(s.slam_error_m * 100.0, 1) << " cm, " << num(s.slam_error_yaw_deg, 2)
        << " deg |\n"
@@ -232,6 +342,7 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
      << "| wall time | " << num(s.elapsed_s, 1) << " s |\n\n"
      << "## Coverage\n\n![coverage](coverage.png)\n\n"
      << "## Trajectory\n\n![trajectory](trajectory.png)\n\n";
+  if (s.ate_scans > 0) md << "## Pose error per scan\n\n![pose error](pose_error.png)\n\nPer-scan figures: `trajectory.csv`.\n\n";
   if (!images.empty()) {
     md << "## Explorer, step by step\n\n";
     for (const std::string& image : images) md << "![" << image << "](" << image << ")\n\n";

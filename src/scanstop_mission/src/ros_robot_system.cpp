@@ -94,6 +94,33 @@ RosRobotSystem::RosRobotSystem(ros::NodeHandle& nh, const CallTimeouts& timeouts
   ground_truth_sub_ = nh_.subscribe("ground_truth", 10, &RosRobotSystem::onGroundTruth, this);
   odom_sub_ = nh_.subscribe("odom", 10, &RosRobotSystem::onOdometry, this);
   slam_path_sub_ = nh_.subscribe("slam/path", 1, &RosRobotSystem::onSlamPath, this);
+  clearance_sub_ = nh_.subscribe("ground_truth/clearance", 100, &RosRobotSystem::onClearance, this);
+}
+
+void RosRobotSystem::onClearance(const scanstop_msgs::MotionClearance::ConstPtr& msg) {
+  if (!std::isfinite(msg->min_clearance_m)) {
+    ROS_WARN_THROTTLE(10.0, "ignoring a ground_truth/clearance message with a non-finite clearance");
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  clearance_ = *msg;
+}
+
+std::optional<double> RosRobotSystem::takeClearance() {
+  if (clearance_sub_.getNumPublishers() == 0) return std::nullopt;  // a real robot: no ground truth
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(0.5);
+  while (ros::ok()) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (clearance_ && static_cast<long>(clearance_->motion_index) != clearance_taken_) {
+        clearance_taken_ = static_cast<long>(clearance_->motion_index);
+        return clearance_->min_clearance_m;
+      }
+    }
+    if (ros::WallTime::now() >= deadline) break;
+    ros::WallDuration(0.005).sleep();
+  }
+  return std::nullopt;
 }
 
 void RosRobotSystem::onSlamPath(const nav_msgs::Path::ConstPtr& msg) {
@@ -191,6 +218,7 @@ MotionResult RosRobotSystem::rotate(double angle_rad) {
   r.achieved = srv.response.achieved_angle_rad;
   r.odom_pose = poseOf(srv.response.odom_pose);
   r.collision = srv.response.collision;
+  r.true_clearance_m = takeClearance();
   return r;
 }
 
@@ -204,10 +232,12 @@ MotionResult RosRobotSystem::forward(double distance_m) {
   r.achieved = srv.response.achieved_distance_m;
   r.odom_pose = poseOf(srv.response.odom_pose);
   r.collision = srv.response.collision;
+  r.true_clearance_m = takeClearance();
   return r;
 }
 
 PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
+                                    const std::vector<Eigen::Vector2d>& contacts,
                                     const std::optional<Eigen::Vector2d>& goal) {
   PlanResult r;
   scanstop_msgs::PlanNext srv;
@@ -217,6 +247,12 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
     p.x = u.x();
     p.y = u.y();
     srv.request.unreachable.push_back(p);
+  }
+  for (const auto& c : contacts) {
+    geometry_msgs::Point p;
+    p.x = c.x();
+    p.y = c.y();
+    srv.request.contacts.push_back(p);
   }
   if (goal) {
     srv.request.to_goal = true;
@@ -270,6 +306,20 @@ int RosRobotSystem::registeredScanCount() {
   }
   std::lock_guard<std::mutex> lock(mutex_);
   return std::max(from_dir, slam_path_.empty() ? from_dir : static_cast<int>(slam_path_.size()));
+}
+
+std::vector<std::pair<int, Pose2D>> RosRobotSystem::registeredScanPoses() {
+  std::vector<std::pair<int, Pose2D>> out;
+  try {
+    const MapDirectory map(map_dir_);  // poses.csv as SLAM last wrote it (atomically)
+    for (const MapScanInfo& s : map.scans()) out.emplace_back(static_cast<int>(s.index), s.map_pose);
+    return out;
+  } catch (const std::exception& e) {
+    ROS_WARN("cannot read the SLAM map directory %s: %s", map_dir_.c_str(), e.what());
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (size_t i = 0; i < slam_path_.size(); ++i) out.emplace_back(static_cast<int>(i), slam_path_[i]);
+  return out;
 }
 
 std::optional<Pose2D> RosRobotSystem::registeredScanPose(int index) {

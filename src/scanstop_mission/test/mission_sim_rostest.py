@@ -56,7 +56,14 @@ class MissionInSim(unittest.TestCase):
         self.assertTrue(summary["ground_truth"])
         self.assertLess(summary["final_slam_error_m"], 0.20, summary)
         self.assertLess(summary["final_slam_error_m"], 0.5 * summary["final_odometry_error_m"], summary)
-        for f in ("report.md", "coverage.png", "trajectory.png", "mission.log"):
+        # The pose error of every scan (ATE) and the body's true clearance along the way are reported.
+        self.assertEqual(summary["ate_scans"], summary["scans"], summary)
+        self.assertGreaterEqual(summary["ate_max_m"], summary["ate_rms_m"], summary)
+        self.assertLess(summary["ate_max_m"], 0.50, summary)  # a sanity bound: 50 planes are sparse
+        self.assertIsNotNone(summary["min_clearance_m"], summary)
+        self.assertGreater(summary["legs_measured"], 0, summary)
+        self.assertGreater(summary["min_clearance_m"], 0.0, summary)  # no collision: never touched
+        for f in ("report.md", "coverage.png", "trajectory.png", "pose_error.png", "trajectory.csv", "mission.log"):
             self.assertTrue(os.path.exists(os.path.join(self.run_dir, f)), f)
         self.assertTrue(any(n.endswith(".png") for n in os.listdir(os.path.join(self.run_dir, "explorer"))))
         print("summary:", json.dumps(summary))

@@ -14,6 +14,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_mission/mission.h"
+#include "scanstop_mission/report.h"
 
 namespace scanstop {
 namespace mission {
@@ -69,6 +70,13 @@ class FakeSystem : public RobotSystem {
   int lose_register_answers = 0;                  // store the scan but report failure this many times
   // Observations
   double max_forward = 0.0;
+  std::vector<double> forwards;                   // every forward distance asked for, in order
+  std::vector<std::pair<char, double>> motions;   // every motion: ('r', angle) or ('f', distance)
+  long first_collision = -1;                      // index into motions of the first colliding one
+  /// The true clearance a motion reports (simulation), by kind ('r', 'f') and command; unset: none.
+  std::function<std::optional<double>(char, double)> clearance_of;
+  std::vector<size_t> forwards_at_plan;           // forwards.size() at each plan
+  std::vector<std::vector<Eigen::Vector2d>> plan_contacts;  // the contacts each plan was given
   int scans_taken = 0;
   std::function<void(int)> on_scan;               // called at every takeScan with the count so far
   std::string state_path;                         // checked at every scan: saved state has all scans
@@ -76,6 +84,7 @@ class FakeSystem : public RobotSystem {
   bool report_odometry = false;                   // currentOdometry() answers (the base's odom topic)
   int mesh_failures_left = 0;                     // buildMesh fails this many times (mesher killed)
   int mesh_calls = 0;
+  Pose2D relax_shift;  // applied to every scan but the first when the mesh is built (a late relaxation)
 
   ScanResult takeScan(int planes) override {
     ScanResult r;
@@ -114,6 +123,8 @@ class FakeSystem : public RobotSystem {
 
   MotionResult rotate(double angle_rad) override {
     MotionResult r;
+    motions.emplace_back('r', angle_rad);
+    if (clearance_of) r.true_clearance_m = clearance_of('r', angle_rad);
     truth = truth * Pose2D(0, 0, angle_rad);
     odom = odom * Pose2D(0, 0, angle_rad * 1.01);
     r.success = true;
@@ -126,6 +137,9 @@ class FakeSystem : public RobotSystem {
   MotionResult forward(double distance_m) override {
     MotionResult r;
     max_forward = std::max(max_forward, distance_m);
+    forwards.push_back(distance_m);
+    motions.emplace_back('f', distance_m);
+    if (clearance_of) r.true_clearance_m = clearance_of('f', distance_m);
     double d = distance_m;
     const Eigen::Vector2d p(truth.x, truth.y);
     const Eigen::Vector2d q = truth.transformPoint(Eigen::Vector2d(distance_m, 0));
@@ -140,6 +154,7 @@ class FakeSystem : public RobotSystem {
     odom = odom * Pose2D(d * 1.03, 0, d * M_PI / 180.0);
     r.success = !r.collision;
     r.message = r.collision ? "bumped into a wall" : "";
+    if (r.collision && first_collision < 0) first_collision = static_cast<long>(motions.size()) - 1;
     r.achieved = d * 1.03;
     r.odom_pose = odom;
     r.duration_s = d / 0.2;
@@ -147,8 +162,10 @@ class FakeSystem : public RobotSystem {
   }
 
   PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
-                      const std::optional<Eigen::Vector2d>& goal) override {
+                      const std::vector<Eigen::Vector2d>& contacts, const std::optional<Eigen::Vector2d>& goal) override {
     PlanResult r;
+    plan_contacts.push_back(contacts);
+    forwards_at_plan.push_back(forwards.size());
     if (always_fail_plan || plan_failures_left > 0) {
       --plan_failures_left;
       r.message = "no floor seen yet";
@@ -205,6 +222,8 @@ class FakeSystem : public RobotSystem {
     MeshResult r;
     r.available = true;
     ++mesh_calls;
+    // A relaxation of SLAM's pose graph after the last scan moves the earlier scans.
+    for (size_t i = 1; i < slam_poses.size(); ++i) slam_poses[i] = slam_poses[i] * relax_shift;
     if (mesh_failures_left > 0) {
       --mesh_failures_left;
       r.message = "service mesher/build_mesh call failed (the node died or refused the request)";
@@ -260,6 +279,35 @@ TEST(Mission, ExploresEveryTargetAndEndsComplete) {
   EXPECT_EQ(saved.scans.size(), 4u);
   EXPECT_EQ(saved.complete_reason, "no reachable cell borders unknown space");
   EXPECT_TRUE(std::ifstream(m.logPath()).good());
+}
+
+TEST(Mission, TheFinalStateHoldsSlamsPosesAsFinallyOptimizedAndTheRegisteredOnes) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{2.0, 0.0}, {3.0, 3.0}};
+  sys.relax_shift = Pose2D(0.05, -0.02, 0.01);
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  ASSERT_EQ(s.scans.size(), sys.slam_poses.size());
+  ASSERT_GE(s.scans.size(), 3u);
+  EXPECT_FALSE(s.scans[0].registered_pose);  // not moved
+  for (size_t i = 1; i < s.scans.size(); ++i) {
+    EXPECT_NEAR(s.scans[i].map_pose.x, sys.slam_poses[i].x, 1e-12) << i;
+    EXPECT_NEAR(s.scans[i].map_pose.yaw, sys.slam_poses[i].yaw, 1e-12) << i;
+    ASSERT_TRUE(s.scans[i].registered_pose) << i;
+    const Pose2D back = *s.scans[i].registered_pose * sys.relax_shift;
+    EXPECT_NEAR(back.x, s.scans[i].map_pose.x, 1e-9) << i;
+    EXPECT_NEAR(back.y, s.scans[i].map_pose.y, 1e-9) << i;
+  }
+  // Saved and loaded with the state.
+  Mission resumed(config(dir.path()), sys, quiet, quiet);
+  resumed.loadSavedState();
+  const MissionState r = resumed.snapshot();
+  ASSERT_EQ(r.scans.size(), s.scans.size());
+  ASSERT_TRUE(r.scans[1].registered_pose);
+  EXPECT_NEAR(r.scans[1].registered_pose->x, s.scans[1].registered_pose->x, 1e-12);
+  EXPECT_NEAR(r.scans[1].map_pose.x, s.scans[1].map_pose.x, 1e-12);
 }
 
 TEST(Mission, ReturnsToTheStartOnceExplorationIsComplete) {
@@ -417,6 +465,116 @@ TEST(Mission, CollisionMarksTargetUnreachableAndReplans) {
   EXPECT_TRUE(s.unreachable[0].isApprox(Eigen::Vector2d(3.0, 0.0)));
   EXPECT_TRUE(s.complete);
   EXPECT_LT(sys.truth.x, 1.5);  // never passed through the wall
+}
+
+TEST(Mission, AfterAContactTheRobotBacksOffAndEveryLaterPlanKnowsTheContact) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.walls = {{{1.5, -1.0}, {1.5, 1.0}}};  // a wall across the way to the first target
+  sys.targets = {{3.0, 0.0}, {0.0, 2.0}};
+  MissionConfig c = config(dir.path());
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  EXPECT_EQ(s.collisions, 1);
+  ASSERT_EQ(s.contacts.size(), 1u);
+  // The fake stops 0.25 m short of the wall (x 1.25); the contact is contact_offset ahead: at the wall.
+  EXPECT_NEAR(s.contacts[0].x(), 1.25 * 1.03 + c.contact_offset_m, 0.1);
+  EXPECT_NEAR(s.contacts[0].y(), 0.0, 0.1);
+  // The motion right after the colliding one is the back-off.
+  ASSERT_GE(sys.first_collision, 0);
+  const size_t hit = static_cast<size_t>(sys.first_collision);
+  ASSERT_LT(hit + 1, sys.motions.size());
+  EXPECT_EQ(sys.motions[hit].first, 'f');
+  EXPECT_EQ(sys.motions[hit + 1].first, 'f');
+  EXPECT_NEAR(sys.motions[hit + 1].second, -c.contact_backoff_m, 1e-12);
+  size_t forwards_to_contact = 0;  // forwards up to and including the colliding one
+  for (size_t i = 0; i <= hit; ++i) forwards_to_contact += sys.motions[i].first == 'f' ? 1 : 0;
+  // Every plan after the contact was given it (the explorer turns it into an obstacle).
+  bool any_after = false;
+  for (size_t i = 0; i < sys.plan_contacts.size(); ++i) {
+    if (sys.forwards_at_plan[i] < forwards_to_contact) {
+      EXPECT_TRUE(sys.plan_contacts[i].empty()) << i;
+      continue;
+    }
+    any_after = true;
+    ASSERT_EQ(sys.plan_contacts[i].size(), 1u) << i;
+    EXPECT_TRUE(sys.plan_contacts[i][0].isApprox(s.contacts[0])) << i;
+  }
+  EXPECT_TRUE(any_after);
+  // Saved with the state: a resumed mission still knows it.
+  Mission resumed(c, sys, quiet, quiet);
+  resumed.loadSavedState();
+  ASSERT_EQ(resumed.snapshot().contacts.size(), 1u);
+  EXPECT_TRUE(resumed.snapshot().contacts[0].isApprox(s.contacts[0]));
+}
+
+TEST(Mission, TheContactBoundEndsTheMissionWithItsReasonAndKeepsTheMap) {
+  TempDir dir;
+  FakeSystem sys;
+  // A box of walls: every target outside it ends in a contact.
+  sys.walls = {{{1.5, -1.5}, {1.5, 1.5}}, {{-1.5, -1.5}, {-1.5, 1.5}}, {{-1.5, 1.5}, {1.5, 1.5}}, {{-1.5, -1.5}, {1.5, -1.5}}};
+  sys.targets = {{3.0, 0.0}, {-3.0, 0.0}, {0.0, 3.0}, {0.0, -3.0}, {3.0, 3.0}};
+  MissionConfig c = config(dir.path());
+  c.max_contacts = 3;
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Failed);
+  const MissionState s = m.snapshot();
+  EXPECT_EQ(s.contacts.size(), 3u);
+  EXPECT_EQ(s.collisions, 3);
+  EXPECT_NE(s.complete_reason.find("safety stop: 3 contacts (max_contacts 3)"), std::string::npos) << s.complete_reason;
+  EXPECT_GE(s.scans.size(), 3u);   // the map so far is kept ...
+  EXPECT_EQ(sys.mesh_calls, 1);    // ... and meshed
+  EXPECT_FALSE(s.complete);
+  // With the back-off off, the next motion after a contact is not backwards.
+  TempDir dir2;
+  FakeSystem again;
+  again.walls = sys.walls;
+  again.targets = sys.targets;
+  MissionConfig off = config(dir2.path());
+  off.contact_backoff_m = 0.0;
+  off.max_contacts = 1;
+  Mission m2(off, again, quiet, quiet);
+  EXPECT_EQ(m2.run(), State::Failed);
+  for (const double f : again.forwards) EXPECT_GT(f, 0.0);
+}
+
+TEST(Mission, TheTrueClearanceOfEveryMotionIsSummarized) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{2.0, 0.0}, {2.0, 2.0}, {0.0, 2.0}};
+  sys.clearance_of = [](char kind, double value) -> std::optional<double> {
+    if (kind == 'r') return 0.021;
+    return value > 1.5 ? 0.04 : 0.3;
+  };
+  Mission m(config(dir.path()), sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  int rotations = 0, forwards = 0, long_legs = 0;
+  for (const auto& [kind, value] : sys.motions) {
+    rotations += kind == 'r';
+    forwards += kind == 'f';
+    long_legs += kind == 'f' && value > 1.5;
+  }
+  ASSERT_GT(rotations, 0);
+  ASSERT_GT(long_legs, 0);
+  EXPECT_EQ(s.clearance_motions, rotations + forwards);
+  EXPECT_EQ(s.clearance_legs, forwards);
+  EXPECT_EQ(s.close_legs, long_legs);
+  EXPECT_NEAR(s.min_clearance_m, 0.021, 1e-12);
+  const Summary sum = summarize(s);
+  EXPECT_TRUE(sum.has_clearance);
+  const std::string json = toJson(sum);
+  EXPECT_NE(json.find("\"min_clearance_m\": 0.0210"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"legs_closer_than_5cm\": " + std::to_string(long_legs)), std::string::npos) << json;
+  // A real robot measures none.
+  TempDir dir2;
+  FakeSystem real;
+  real.targets = sys.targets;
+  Mission m2(config(dir2.path()), real, quiet, quiet);
+  EXPECT_EQ(m2.run(), State::Done);
+  EXPECT_FALSE(summarize(m2.snapshot()).has_clearance);
+  EXPECT_NE(toJson(summarize(m2.snapshot())).find("\"min_clearance_m\": null"), std::string::npos);
 }
 
 TEST(Mission, ScanBudgetEndsTheMission) {

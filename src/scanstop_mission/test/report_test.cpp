@@ -2,6 +2,7 @@
 #include <stdlib.h>
 
 #include <cmath>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -51,6 +52,58 @@ TEST(Report, SummaryComputesErrorsAgainstGroundTruth) {
   EXPECT_EQ(s.unconverged_registrations, 1);
 }
 
+TEST(Report, AteCoversEveryScanNotOnlyTheLast) {
+  // The final pose can be right while scans on the way were far off: the ATE sees them.
+  MissionState st = twoScans();
+  ScanRecord c = st.scans.back();
+  c.index = 2;
+  c.map_pose = Pose2D(5.0, 1.0, 0.0);
+  c.odom_pose = Pose2D(5.0, 1.0, 0.0);
+  c.true_pose = Pose2D(5.0, 1.12, 0.0);  // 12 cm off
+  ScanRecord d = st.scans.back();
+  d.index = 3;
+  d.map_pose = Pose2D(0.0, 0.0, 0.0);
+  d.odom_pose = Pose2D(0.0, 0.0, 0.0);
+  d.true_pose = Pose2D(0.0, 0.0, 0.0);  // back at the start, exact
+  st.scans.push_back(c);
+  st.scans.push_back(d);
+  const Summary s = summarize(st);
+  EXPECT_NEAR(s.slam_error_m, 0.0, 1e-12);  // the final error hides scan 2
+  EXPECT_EQ(s.ate_scans, 4);
+  EXPECT_NEAR(s.ate_max_m, 0.12, 1e-9);
+  EXPECT_EQ(s.ate_max_scan, 2);
+  EXPECT_NEAR(s.ate_rms_m, std::sqrt((0.03 * 0.03 + 0.12 * 0.12) / 4.0), 1e-9);
+  EXPECT_NEAR(s.ate_yaw_max_deg, 0.01 * 180.0 / M_PI, 1e-9);
+  EXPECT_NEAR(s.odom_ate_max_m, 0.5, 1e-9);
+  const std::string json = toJson(s);
+  EXPECT_NE(json.find("\"ate_max_m\": 0.1200"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"ate_max_scan\": 2"), std::string::npos) << json;
+  // A scan without a true pose (a real robot) does not count.
+  st.scans[2].true_pose.reset();
+  EXPECT_EQ(summarize(st).ate_scans, 3);
+  EXPECT_NEAR(summarize(st).ate_max_m, 0.03, 1e-9);
+}
+
+TEST(Report, TrajectoryCsvHasEveryScanWithItsRegisteredAndFinalPose) {
+  MissionState st = twoScans();
+  st.scans[1].registered_pose = Pose2D(2.10, 0.0, 0.0);  // relaxation moved it to (2.03, 0, 0.01)
+  const std::string csv = trajectoryCsv(st);
+  std::istringstream in(csv);
+  std::string header, line0, line1, extra;
+  std::getline(in, header);
+  std::getline(in, line0);
+  std::getline(in, line1);
+  EXPECT_FALSE(std::getline(in, extra));
+  EXPECT_EQ(header.rfind("index,x,y,yaw,registered_x", 0), 0u) << header;
+  EXPECT_EQ(line1.rfind("1,2.030000,0.000000,0.010000,2.100000,0.000000,0.000000,2.300000,0.400000,0.100000,"
+                        "2.000000,0.000000,0.000000,0.030000,",
+                        0),
+            0u)
+      << line1;
+  // Without a relaxation the registered pose is the pose itself.
+  EXPECT_EQ(line0.rfind("0,0.000000,0.000000,0.000000,0.000000,0.000000,0.000000,", 0), 0u) << line0;
+}
+
 TEST(Report, WritesSummaryPlotsAndIndex) {
   char pattern[] = "/tmp/scanstop_report_test_XXXXXX";
   const std::string dir = mkdtemp(pattern);
@@ -61,7 +114,7 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   EXPECT_NE(json.find("\"final_slam_error_m\": 0.0300"), std::string::npos) << json;
   EXPECT_NE(json.find("\"final_odometry_error_m\": 0.5000"), std::string::npos) << json;
   EXPECT_NE(json.find("\"complete\": true"), std::string::npos);
-  for (const char* png : {"/coverage.png", "/trajectory.png"}) {
+  for (const char* png : {"/coverage.png", "/trajectory.png", "/pose_error.png"}) {
     const cv::Mat img = cv::imread(dir + png);
     ASSERT_FALSE(img.empty()) << png;
     // Something was drawn besides the white background.
@@ -71,6 +124,9 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   }
   const std::string text = readFile(md);
   EXPECT_NE(text.find("| scans | 2 |"), std::string::npos) << text;
+  EXPECT_NE(text.find("(ATE) | RMS 2.1 cm, max 3.0 cm (scan 1)"), std::string::npos) << text;
+  EXPECT_NE(text.find("pose_error.png"), std::string::npos) << text;
+  EXPECT_NE(readFile(dir + "/trajectory.csv").find("\n1,2.030000,"), std::string::npos);
   EXPECT_NE(text.find("step_001_evaluation.png"), std::string::npos);
   // Without a world (the real robot, or no world_file) there is no true coverage.
   EXPECT_NE(json.find("\"true_coverage\": null"), std::string::npos) << json;
@@ -92,6 +148,8 @@ TEST(Report, RealRobotHasNoGroundTruthFigures) {
   const Summary s = summarize(st);
   EXPECT_FALSE(s.has_ground_truth);
   EXPECT_NE(toJson(s).find("\"final_slam_error_m\": null"), std::string::npos);
+  EXPECT_EQ(s.ate_scans, 0);
+  EXPECT_NE(toJson(s).find("\"ate_rms_m\": null"), std::string::npos);
 }
 
 }  // namespace

@@ -152,6 +152,7 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10, true);
   tf_connect_pub_ = nh.advertise<tf2_msgs::TFMessage>("/tf", 100, [this](const ros::SingleSubscriberPublisher& pub) { onTfSubscriber(pub); });
   truth_pub_ = nh.advertise<nav_msgs::Odometry>("ground_truth", 10, true);
+  clearance_pub_ = nh.advertise<scanstop_msgs::MotionClearance>("ground_truth/clearance", 100);
   scan_pub_ = nh.advertise<sensor_msgs::PointCloud2>("scanner/last_scan", 1, true);
   progress_pub_ = nh.advertise<scanstop_msgs::Progress>("scanner/progress", 10);
   marker_pub_ = nh.advertise<visualization_msgs::Marker>("sim/world_mesh", 1, true);
@@ -305,6 +306,7 @@ bool SimNode::onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotat
   if (!res.message.empty()) return true;
   const MotionOutput out = runMotion([&] { return sim_->rotate(req.angle_rad); }, 0.0, req.angle_rad, &res.message);
   if (!res.message.empty()) return true;
+  publishClearance("rotate", req.angle_rad, out);
   res.achieved_angle_rad = out.achieved;
   res.collision = out.collision;
   res.duration_s = out.duration_s;
@@ -320,6 +322,7 @@ bool SimNode::onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::For
   if (!res.message.empty()) return true;
   const MotionOutput out = runMotion([&] { return sim_->forward(req.distance_m); }, req.distance_m, 0.0, &res.message);
   if (!res.message.empty()) return true;
+  publishClearance("forward", req.distance_m, out);
   res.achieved_distance_m = out.achieved;
   res.collision = out.collision;
   res.duration_s = out.duration_s;
@@ -328,6 +331,18 @@ bool SimNode::onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::For
   std::lock_guard<std::mutex> lock(mutex_);
   res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, now());
   return true;
+}
+
+void SimNode::publishClearance(const char* motion, double command, const MotionOutput& out) {
+  scanstop_msgs::MotionClearance m;
+  m.header.stamp = now();
+  m.header.frame_id = map_frame_;
+  m.motion_index = motion_index_++;
+  m.motion = motion;
+  m.command = command;
+  m.min_clearance_m = out.min_clearance_m;
+  m.collision = out.collision;
+  clearance_pub_.publish(m);
 }
 
 MotionOutput SimNode::runMotion(const std::function<MotionOutput()>& motion, double distance_m, double angle_rad,

@@ -241,14 +241,21 @@ MotionOutput Simulator::forward(double distance_m) {
   const double sign = f.true_length_m < 0 ? -1.0 : 1.0;
   const Pose2D before = true_world_;
   double travelled = length;
+  const auto bodyClearance = [this](const Pose2D& p) {
+    return std::max(0.0, world_.clearanceWithin(Eigen::Vector2d(p.x, p.y), config_.robot_radius_m + kClearanceRange) -
+                             config_.robot_radius_m);
+  };
+  out.min_clearance_m = bodyClearance(before);
   for (double s = config_.collision_step_m; s < length + config_.collision_step_m; s += config_.collision_step_m) {
     const double t = std::min(s, length);
     const Pose2D p = before * f.along(sign * t);
     if (world_.discCollides(Eigen::Vector2d(p.x, p.y), config_.robot_radius_m)) {
       travelled = std::max(0.0, t - config_.collision_step_m);  // the last pose without contact
       out.collision = true;
+      out.min_clearance_m = 0.0;
       break;
     }
+    out.min_clearance_m = std::min(out.min_clearance_m, bodyClearance(p));
   }
   true_world_ = before * f.along(sign * travelled);
   if (!out.collision) true_world_ = true_world_ * Pose2D(0, 0, f.finish_angle_rad);
@@ -266,6 +273,8 @@ MotionOutput Simulator::rotate(double angle_rad) {
   const std::string problem = checkRotation(angle_rad, config_.max_rotate_rad);
   if (!problem.empty()) throw std::invalid_argument(problem);
   MotionOutput out;
+  out.min_clearance_m = kClearanceRange;
+  const Pose2D start = true_world_;
   const Pose2D delta = sampleRotation(config_.errors.motion, angle_rad, rng_);
   const Pose2D next = true_world_ * delta;
   if (world_.discCollides(Eigen::Vector2d(next.x, next.y), config_.robot_radius_m)) {
@@ -275,6 +284,13 @@ MotionOutput Simulator::rotate(double angle_rad) {
     true_world_ = next;
   }
   out.achieved = angle_rad;
+  // A disc turning in place keeps its clearance; the drift while turning moves it from the start
+  // to the end (a few millimetres).
+  for (const Pose2D& p : {start, true_world_})
+    out.min_clearance_m = std::min(
+        out.min_clearance_m,
+        std::max(0.0, world_.clearanceWithin(Eigen::Vector2d(p.x, p.y), config_.robot_radius_m + kClearanceRange) -
+                          config_.robot_radius_m));
   odom_ = odom_ * Pose2D(0.0, 0.0, angle_rad);
   out.duration_s = std::abs(angle_rad) / config_.errors.motion.angular_speed_radps;
   clock_s_ += out.duration_s;

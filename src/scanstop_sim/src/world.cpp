@@ -174,6 +174,13 @@ bool World::discCollides(const Eigen::Vector2d& p, double radius) const {
   return false;
 }
 
+double World::clearanceWithin(const Eigen::Vector2d& p, double max_m) const {
+  double best = max_m;
+  for (const int c : cellsNear(p, max_m))
+    for (const int s : grid_[c]) best = std::min(best, distanceTo(polygons_[s], p));
+  return best;
+}
+
 double World::clearance(const Eigen::Vector2d& p) const {
   double best = std::numeric_limits<double>::infinity();
   for (const Polygon2D& poly : polygons_) best = std::min(best, distanceTo(poly, p));

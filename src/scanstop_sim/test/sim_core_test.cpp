@@ -185,6 +185,28 @@ TEST(MotionModel, ThesisProfileMeanAndSpread) {
   EXPECT_NEAR(std::sqrt(pos2 / n), m.rotation_position_sigma_m_per_rad * M_PI / 2, 0.0005);
 }
 
+TEST(Simulator, EveryMotionReportsTheBodysTrueClearance) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  b.box({2.0, -5, 0}, {2.1, 5, 2.5});   // a wall at x = 2
+  b.box({-5, 0.8, 0}, {5, 0.9, 2.5});   // and one at y = 0.8, along the way
+  SimConfig config;  // perfect motion
+  Simulator sim(World::fromMesh(b.mesh(), "walls"), config, Pose2D(0, 0, 0));
+  const double r = config.robot_radius_m;
+  // Along y = 0 the side wall stays 0.8 - r away; towards x = 1.5 the end wall comes to 0.5 - r.
+  MotionOutput out = sim.forward(1.5);
+  EXPECT_FALSE(out.collision);
+  EXPECT_NEAR(out.min_clearance_m, 0.5 - r, 2e-3);
+  out = sim.rotate(M_PI / 2);
+  EXPECT_NEAR(out.min_clearance_m, 0.5 - r, 2e-3);
+  // Far from everything: the measurement stops at kClearanceRange.
+  Simulator open(World::fromMesh(b.mesh(), "walls"), config, Pose2D(-3.5, -3.5, 0));
+  EXPECT_NEAR(open.forward(0.1).min_clearance_m, kClearanceRange, 1e-9);
+  // A contact: 0.
+  Simulator hit(World::fromMesh(b.mesh(), "walls"), config, Pose2D(0, 0, 0));
+  EXPECT_EQ(hit.forward(3.0).min_clearance_m, 0.0);
+}
+
 TEST(Simulator, ForwardMotionStopsAtContactAndReportsTheCollision) {
   WorldBuilder b(2.5);
   b.floorAndCeiling(-5, -5, 5, 5);

@@ -30,6 +30,10 @@ struct ExplorerConfig {
   double progress_m = 0.2;            ///< the travel distance to an unreached target must shrink by this per plan [m], [0, 10]
   int max_failed_attempts = 2;        ///< plans without progress before a target is blacklisted, [1, 100]
   double blacklist_radius_m = 0.5;    ///< radius of the blacklisted disc around a failed target [m], (0, 10]
+  /// A contact (where the robot touched something the scans did not show as an obstacle) becomes an
+  /// obstacle disc of this radius in every later plan; the planner's inflation by robot_radius_m
+  /// keeps every path off it [m], (0, 2]
+  double contact_radius_m = 0.15;
 
   /// Validates every field (ConfigError naming parameter, value and range).
   void validate() const;
@@ -65,6 +69,11 @@ class Explorer {
   /// that point is blacklisted already. Returns true when it was new.
   bool markUnreachable(const Eigen::Vector2d& target_map);
   const std::vector<std::pair<Eigen::Vector2d, double>>& blacklisted() const { return blacklist_; }
+  /// A point the robot touched (map frame): from now on an obstacle disc of contact_radius_m in the
+  /// floor grid of every plan, whatever the scans show there. Returns false (nothing changed) for a
+  /// non-finite point or one within 1 cm of a known contact.
+  bool addContact(const Eigen::Vector2d& point_map);
+  const std::vector<Eigen::Vector2d>& contacts() const { return contacts_; }
 
   size_t scanCount() const { return scans_.size(); }
   bool hasScan(uint32_t index) const { return scans_.count(index) > 0; }
@@ -83,6 +92,7 @@ class Explorer {
   FloorMap floor_;
   std::map<uint32_t, Pose2D> scans_;
   std::vector<std::pair<Eigen::Vector2d, double>> blacklist_;
+  std::vector<Eigen::Vector2d> contacts_;
   Attempt last_;
 };
 

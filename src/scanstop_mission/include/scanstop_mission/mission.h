@@ -38,6 +38,18 @@ struct MissionConfig {
   /// the scans there only hold the pose (room_10x8, min_scan_travel 2.0, seeds 1-3: 3 m -> 4 scans
   /// on the way back, 4 m -> 3, no collision on the way back either way).
   double home_scan_travel_m = 4.0;
+  /// After a collision or stall the robot backs off straight backwards by this much (the way it
+  /// came on a forward leg), so that the next motion does not start in contact [m], [0, 1]; 0 = off.
+  double contact_backoff_m = 0.3;
+  /// Where the contact is taken to be: this far ahead of base_link in the driving direction (the
+  /// body's front edge from its centre; the Pioneer 2 DX's 0.26 m swept radius plus a little) [m],
+  /// [0, 2]. The point joins MissionState::contacts and every later plan as an obstacle.
+  double contact_offset_m = 0.3;
+  /// A safety bound: after this many contacts the mission stops exploring (the map, the mesh and
+  /// the report are kept) and ends Failed with the reason, instead of trying again, [1, 1000].
+  int max_contacts = 5;
+  /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
+  static constexpr double kCloseLeg = 0.05;
   int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
   /// Wait before retry n (n = 1, 2, ...) of a failed step: n times this [s]. A node that died
   /// mid-call is usually back (respawn) within a few seconds.
@@ -95,7 +107,18 @@ class Mission {
   /// (exclusive; -1 = all): registered by a mission that died before it could save them, or
   /// still being registered when this mission restarted. Caller holds no lock.
   void adoptScansRegisteredElsewhere(int upto = -1);
+  /// Takes SLAM's current pose of every known scan (registeredScanPoses(): after a pose-graph
+  /// relaxation they are the corrected ones) into the records, keeping the pose each registration
+  /// answered in ScanRecord::registered_pose. Caller holds no lock.
+  void adoptCurrentPoses();
   bool driveTo(const Eigen::Vector2d& waypoint, bool& collision);
+  /// After a collision on a motion in direction `sign` (+1 forward, -1 backward, 0 a rotation):
+  /// records the contact point (none for a rotation) and backs off by contact_backoff_m.
+  void escapeContact(int sign, const std::string& what);
+  /// Books a motion's result into the state: modelled time, odometry, true clearance (leg: a
+  /// forward motion).
+  void noteMotion(const MotionResult& r, bool leg);
+  bool contactBoundReached() const;
   bool checkControl();  ///< waits while paused; false when aborted
   void backoff(int attempt);  ///< waits attempt * retry_backoff_s (returns early on abort)
   void setState(State s);

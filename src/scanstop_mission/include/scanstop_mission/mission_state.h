@@ -20,7 +20,10 @@ State stateFromString(const std::string& s);  ///< throws std::invalid_argument
 /// One scan of the mission.
 struct ScanRecord {
   int index = 0;                         ///< SLAM's scan index
-  Pose2D map_pose;                       ///< corrected pose (map)
+  Pose2D map_pose;                       ///< corrected pose (map): SLAM's latest, as finally optimized
+  /// The pose the registration answered, when SLAM has moved the scan since (pose-graph relaxation);
+  /// nullopt while map_pose is still that pose.
+  std::optional<Pose2D> registered_pose;
   Pose2D odom_pose;                      ///< odometry pose at scan time (odom = map at the start)
   std::optional<Pose2D> true_pose;       ///< ground truth in the map frame (simulation)
   bool converged = true;
@@ -42,6 +45,12 @@ struct MissionState {
   State state = State::Idle;
   std::vector<ScanRecord> scans;
   std::vector<Eigen::Vector2d> unreachable;  ///< targets the robot failed to reach (map frame)
+  std::vector<Eigen::Vector2d> contacts;     ///< where the robot touched something (map frame): obstacles
+  // True clearance of the body (simulation): over every motion with a measurement.
+  int clearance_motions = 0;                 ///< motions with a true clearance
+  int clearance_legs = 0;                    ///< ... of them straight legs (forward motions)
+  int close_legs = 0;                        ///< legs that came closer than 5 cm (contacts included)
+  double min_clearance_m = -1.0;             ///< smallest true clearance of any motion [m]; < 0: none measured
   std::vector<EventRecord> events;
   int collisions = 0;
   int plans = 0;

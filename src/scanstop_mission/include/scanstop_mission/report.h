@@ -24,6 +24,23 @@ struct Summary {
   double slam_error_yaw_deg = 0.0;
   double odom_error_m = 0.0;           ///< final odometry-only position error against ground truth [m]
   double odom_error_yaw_deg = 0.0;
+  /// Absolute trajectory error (simulation): the position error of every scan with a true pose,
+  /// at SLAM's poses as finally optimized (ScanRecord::map_pose), RMS and max; the same for the
+  /// yaw and for odometry alone. ate_scans = 0: no ground truth.
+  int ate_scans = 0;
+  double ate_rms_m = 0.0;
+  double ate_max_m = 0.0;
+  int ate_max_scan = -1;               ///< SLAM index of the scan with the largest error
+  double ate_yaw_rms_deg = 0.0;
+  double ate_yaw_max_deg = 0.0;
+  double odom_ate_rms_m = 0.0;
+  double odom_ate_max_m = 0.0;
+  /// True clearance of the body (simulation): the smallest over every motion, the straight legs
+  /// measured and those that came closer than 5 cm. has_clearance false: not measured.
+  bool has_clearance = false;
+  double min_clearance_m = 0.0;
+  int clearance_legs = 0;
+  int close_legs = 0;
   double compute_per_cycle_mean_s = 0.0;  ///< register + plan wall time per cycle [s]
   double compute_per_cycle_max_s = 0.0;
   double scan_time_mean_s = 0.0;       ///< modelled scan duration [s]
@@ -50,7 +67,11 @@ Summary summarize(const MissionState& state);
 /// The summary as one JSON object.
 std::string toJson(const Summary& s);
 
-/// Writes summary.json, coverage.png, trajectory.png and report.md into run_dir (atomically).
+/// Per-scan poses and errors as CSV (index, SLAM, registered, odometry and true pose, errors).
+std::string trajectoryCsv(const MissionState& state);
+
+/// Writes summary.json, coverage.png, trajectory.png, pose_error.png (simulation),
+/// trajectory.csv and report.md into run_dir (atomically).
 /// `images` lists further images (relative to run_dir, e.g. the explorer's per-step figures) that the
 /// report links. Returns the path of report.md. Throws IoError.
 /// `truth`: the ground-truth coverage when the run was simulated (summary.json and the report show it).

@@ -6,6 +6,7 @@
 #include <any>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "scanstop_common/pose.h"
@@ -35,6 +36,9 @@ struct MotionResult : StepResult {
   double achieved = 0.0;      ///< [rad] for a rotation, [m] for a forward motion
   Pose2D odom_pose;           ///< final odometry pose of base_link
   bool collision = false;     ///< stopped by a collision or stall
+  /// Simulation only: the true smallest distance between the body and the world along the motion
+  /// (sim_node's ground_truth/clearance) [m]; nullopt on a real robot.
+  std::optional<double> true_clearance_m;
 };
 
 /// A scan registered into the map.
@@ -75,7 +79,9 @@ class RobotSystem {
   virtual MotionResult forward(double distance_m) = 0;
   /// The next scan location and the path to it; with a goal, the path to the reachable cell nearest
   /// to the goal instead (PlanResult::complete still says whether exploration is complete).
+  /// `contacts`: where the robot touched something (map frame): obstacles the plan must not pass.
   virtual PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
+                              const std::vector<Eigen::Vector2d>& contacts,
                               const std::optional<Eigen::Vector2d>& goal) = 0;
   virtual MeshResult buildMesh(const std::string& output_path) = 0;
   /// The true pose in the map frame (simulation only), for the report; nullopt on a real robot.
@@ -85,6 +91,16 @@ class RobotSystem {
   virtual int registeredScanCount() = 0;
   /// The pose SLAM stored for scan `index` (after a lost response); nullopt when unknown.
   virtual std::optional<Pose2D> registeredScanPose(int index) = 0;
+  /// Every pose SLAM holds now, by scan index (after a relaxation of the pose graph they differ from
+  /// the poses the registrations answered); empty when unknown. The default asks
+  /// registeredScanPose() for each index below registeredScanCount().
+  virtual std::vector<std::pair<int, Pose2D>> registeredScanPoses() {
+    std::vector<std::pair<int, Pose2D>> out;
+    const int count = registeredScanCount();
+    for (int i = 0; i < count; ++i)
+      if (const std::optional<Pose2D> p = registeredScanPose(i)) out.emplace_back(i, *p);
+    return out;
+  }
   /// The odometry pose SLAM stored with scan `index`; nullopt when unknown (the caller then assumes
   /// the robot has not moved since).
   virtual std::optional<Pose2D> registeredScanOdometry(int /*index*/) { return std::nullopt; }

@@ -5,6 +5,7 @@
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
+#include <scanstop_msgs/MotionClearance.h>
 
 #include <mutex>
 #include <optional>
@@ -37,11 +38,13 @@ class RosRobotSystem : public RobotSystem {
   MotionResult rotate(double angle_rad) override;
   MotionResult forward(double distance_m) override;
   PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
+                      const std::vector<Eigen::Vector2d>& contacts,
                       const std::optional<Eigen::Vector2d>& goal) override;
   MeshResult buildMesh(const std::string& output_path) override;
   std::optional<Pose2D> groundTruth() override;
   int registeredScanCount() override;
   std::optional<Pose2D> registeredScanPose(int index) override;
+  std::vector<std::pair<int, Pose2D>> registeredScanPoses() override;
   std::optional<Pose2D> registeredScanOdometry(int index) override;
   /// The latest `odom` message (the base publishes it latched after every motion), waited for up to
   /// wait_for_service_s.
@@ -51,12 +54,18 @@ class RosRobotSystem : public RobotSystem {
   void onGroundTruth(const nav_msgs::Odometry::ConstPtr& msg);
   void onOdometry(const nav_msgs::Odometry::ConstPtr& msg);
   void onSlamPath(const nav_msgs::Path::ConstPtr& msg);
+  void onClearance(const scanstop_msgs::MotionClearance::ConstPtr& msg);
+  /// The true clearance of the motion that just ended (sim_node publishes it before it answers):
+  /// waits up to 0.5 s for a message newer than the last one taken; nullopt without a simulator.
+  std::optional<double> takeClearance();
 
   ros::NodeHandle nh_;
   CallTimeouts timeouts_;
   std::string map_dir_;
   ros::ServiceClient take_scan_, register_scan_, rotate_, forward_, plan_next_, build_mesh_;
-  ros::Subscriber ground_truth_sub_, odom_sub_, slam_path_sub_;
+  ros::Subscriber ground_truth_sub_, odom_sub_, slam_path_sub_, clearance_sub_;
+  std::optional<scanstop_msgs::MotionClearance> clearance_;  ///< the newest ground_truth/clearance
+  long clearance_taken_ = -1;                                ///< motion_index of the last one taken
   std::vector<Pose2D> slam_path_;  ///< scan poses from slam/path (latched): the map when map_dir is on another host
   std::mutex mutex_;
   std::optional<Pose2D> ground_truth_, odom_;

@@ -6,6 +6,7 @@
 
 #include <ros/ros.h>
 #include <scanstop_msgs/Forward.h>
+#include <scanstop_msgs/MotionClearance.h>
 #include <scanstop_msgs/ResetSim.h>
 #include <scanstop_msgs/Rotate.h>
 #include <scanstop_msgs/TakeScan.h>
@@ -68,6 +69,10 @@ class SimNode {
               laser_frame_ = "laser";
   ros::ServiceServer take_scan_srv_, rotate_srv_, forward_srv_, reset_srv_;
   ros::Publisher clock_pub_, odom_pub_, truth_pub_, scan_pub_, progress_pub_, marker_pub_;
+  ros::Publisher clearance_pub_;  ///< ground_truth/clearance: one MotionClearance per motion
+  uint32_t motion_index_ = 0;
+  /// Publishes the motion's true clearance (before the call is answered).
+  void publishClearance(const char* motion, double command, const MotionOutput& out);
   tf2_ros::TransformBroadcaster tf_;
   ros::Publisher tf_connect_pub_;  ///< the same /tf publication, for onTfSubscriber
   std::mutex tf_mutex_;

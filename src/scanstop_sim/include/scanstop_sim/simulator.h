@@ -54,10 +54,17 @@ struct ScanOutput {
   double duration_s = 0.0;        ///< modelled
 };
 
+/// How far MotionOutput::min_clearance_m is measured [m].
+constexpr double kClearanceRange = 1.0;
+
 struct MotionOutput {
   double achieved = 0.0;          ///< as odometry measured it: [m] or [rad]
   bool collision = false;
   double duration_s = 0.0;        ///< modelled
+  /// Ground truth: the smallest distance between the robot's body (the robot_radius disc) and the
+  /// world's obstacles along the motion (every true pose it passed), measured up to
+  /// kClearanceRange (that value: at least as far); 0 at a contact [m].
+  double min_clearance_m = 0.0;
 };
 
 /// Makes glibc keep the scan-sized buffers (cloud, PointCloud2, serialized message: ~5 MB each for

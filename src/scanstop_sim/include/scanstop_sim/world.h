@@ -51,6 +51,9 @@ class World {
   bool discCollides(const Eigen::Vector2d& p, double radius) const;
   /// Smallest distance from p to an obstacle [m] (0 inside one, +inf when there are none).
   double clearance(const Eigen::Vector2d& p) const;
+  /// clearance(p), searched only out to max_m (the obstacle grid's cells near p): max_m when no
+  /// obstacle is closer [m].
+  double clearanceWithin(const Eigen::Vector2d& p, double max_m) const;
 
   const TriangleMesh& mesh() const { return mesh_; }
   const std::string& name() const { return name_; }
