@@ -57,6 +57,12 @@ print("scans            %d, coverage of the reachable floor %.1f %%, collisions 
 if s.get("ground_truth"):
     print("final pose error SLAM %.1f cm / %.2f deg, odometry alone %.1f cm / %.1f deg" % (
         100 * s["final_slam_error_m"], s["final_slam_error_yaw_deg"], 100 * s["final_odometry_error_m"], s["final_odometry_error_yaw_deg"]))
+if s.get("ate_rms_m") is not None:
+    print("pose error, every scan  SLAM RMS %.1f cm, max %.1f cm (scan %d); odometry alone RMS %.1f cm" % (
+        100 * s["ate_rms_m"], 100 * s["ate_max_m"], s["ate_max_scan"], 100 * s["odometry_ate_rms_m"]))
+if s.get("min_clearance_m") is not None:
+    print("true clearance   smallest %.1f cm; %d of %d straight legs closer than 5 cm" % (
+        100 * s["min_clearance_m"], s["legs_closer_than_5cm"], s["legs_measured"]))
 print("compute / cycle  %.2f s mean, %.2f s max (modelled scan time %.1f s)" % (
     s["compute_per_cycle_mean_s"], s["compute_per_cycle_max_s"], s["scan_time_mean_s"]))
 print("time             %.0f s mission, %d s with setup and build" % (s["elapsed_s"], total))

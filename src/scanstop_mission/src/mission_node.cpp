@@ -2,11 +2,15 @@
 
 #include <dirent.h>
 #include <malloc.h>
+#include <signal.h>
+#include <unistd.h>
 #include <scanstop_msgs/MissionStatus.h>
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
+#include <iterator>
 #include <sstream>
 
 #include "scanstop_common/error.h"
@@ -195,6 +199,15 @@ std::optional<TrueCoverage> MissionNode::trueCoverage() {
   }
 }
 
+namespace {
+/// Whether this process was started by roslaunch (its parent's command line names it).
+bool parentIsRoslaunch() {
+  std::ifstream in("/proc/" + std::to_string(::getppid()) + "/cmdline", std::ios::binary);
+  const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return cmdline.find("roslaunch") != std::string::npos;
+}
+}  // namespace
+
 void MissionNode::runMission() {
   const State end = mission_->run();
   const MissionState state = mission_->snapshot();
@@ -224,6 +237,14 @@ void MissionNode::runMission() {
   running_ = false;
   if (shutdown_when_done_) {
     ros::WallDuration(0.5).sleep();  // let the last status go out
+    // A normal end ends the launch calmly: roslaunch is asked to shut down (SIGINT, as Ctrl-C) and
+    // stops every node, this one too, instead of reporting a required process that died. Any other
+    // end (or a parent that is not roslaunch, e.g. rostest) shuts this node down, and roslaunch
+    // reports the required process.
+    if (end == State::Done && parentIsRoslaunch()) {
+      ROS_INFO("mission: done; ending the launch");
+      if (::kill(::getppid(), SIGINT) == 0) return;
+    }
     ros::shutdown();
   }
 }
