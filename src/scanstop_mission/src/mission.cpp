@@ -2,10 +2,12 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -42,6 +44,12 @@ void MissionConfig::validate() const {
   requireInRange("contact_backoff", contact_backoff_m, 0.0, 1.0, "m");
   requireInRange("contact_offset", contact_offset_m, 0.0, 2.0, "m");
   requireInRange("max_contacts", max_contacts, 1, 1000);
+  requireInRange("leg_check_radius", leg_check_radius_m, 1e-3, 2.0, "m");
+  requireInRange("leg_check_margin", leg_check_margin_m, 0.0, 1.0, "m");
+  requireInRange("leg_check_min_z", leg_check_min_z_m, -1.0, 5.0, "m");
+  requireInRange("leg_check_max_z", leg_check_max_z_m, leg_check_min_z_m, 5.0, "m");
+  requireInRange("leg_check_self", leg_check_self_m, 0.0, 2.0, "m");
+  requireInRange("leg_check_min_points", leg_check_min_points, 1, 1000);
   requireInRange("retry_backoff", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
   requireInRange("max_cycles", max_cycles, 1, 1000000);
@@ -304,6 +312,14 @@ bool Mission::scanAndRegister() {
     state_.modelled_time_s += scan.duration_s;
     state_.odom_now = scan.odom_pose;
   }
+  // The leg check's obstacles: the points in the body's height band, off the robot itself.
+  obstacles_.clear();
+  obstacles_odom_ = scan.odom_pose;
+  const double self2 = config_.leg_check_self_m * config_.leg_check_self_m;
+  for (const Eigen::Vector3f& p : scan.points_base)
+    if (p.z() > config_.leg_check_min_z_m && p.z() < config_.leg_check_max_z_m &&
+        static_cast<double>(p.x()) * p.x() + static_cast<double>(p.y()) * p.y() > self2)
+      obstacles_.emplace_back(p.x(), p.y());
   info_("scan " + std::to_string(snapshot().scans.size()) + ": " + std::to_string(scan.valid_points) + " valid of " +
         std::to_string(scan.raw_points) + " points, " + std::to_string(scan.planes_dropped) + " planes dropped, " +
         fmt(scan.duration_s, 1) + " s modelled");
@@ -389,7 +405,25 @@ bool Mission::driveTo(const Eigen::Vector2d& waypoint, bool& collision) {
         return false;
       }
     }
-    const double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
+    double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
+    const double free = freeTravel();
+    if (free - config_.leg_check_margin_m < step) {
+      const double allowed = std::max(0.0, free - config_.leg_check_margin_m);
+      event("leg check: the latest scan shows an obstruction " + fmt(free) + " m ahead on the " + fmt(step) +
+                " m leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")" +
+                (allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it"),
+            true);
+      if (allowed >= 0.05) {
+        const MotionResult r = robot_.forward(allowed);
+        noteMotion(r, true);
+        if (r.collision) {
+          collision = true;
+          event("collision after " + fmt(r.achieved) + " of " + fmt(allowed) + " m: " + r.message, true);
+          escapeContact(1, "forward motion");
+        }
+      }
+      return false;
+    }
     const MotionResult r = robot_.forward(step);
     noteMotion(r, true);
     if (r.collision) {
@@ -406,6 +440,29 @@ bool Mission::driveTo(const Eigen::Vector2d& waypoint, bool& collision) {
   }
   event("could not reach waypoint (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ") in 100 motions", true);
   return false;
+}
+
+double Mission::freeTravel() const {
+  if (!config_.leg_check || obstacles_.empty()) return std::numeric_limits<double>::infinity();
+  Pose2D odom_now;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    odom_now = state_.odom_now;
+  }
+  // From the scan's base_link to the present one, by odometry.
+  const Pose2D T = odom_now.inverse() * obstacles_odom_;
+  const double r = config_.leg_check_radius_m, r2 = r * r;
+  std::vector<double> hits;  // where along the leg the disc first touches each point ahead
+  for (const Eigen::Vector2d& q : obstacles_) {
+    const Eigen::Vector2d p = T.transformPoint(q);
+    if (std::abs(p.y()) >= r || p.squaredNorm() < r2) continue;  // beside the way, or under the body now
+    const double s = p.x() - std::sqrt(r2 - p.y() * p.y());
+    if (s >= 0.0) hits.push_back(s);
+  }
+  const size_t k = static_cast<size_t>(config_.leg_check_min_points);
+  if (hits.size() < k) return std::numeric_limits<double>::infinity();
+  std::nth_element(hits.begin(), hits.begin() + (k - 1), hits.end());
+  return hits[k - 1];
 }
 
 void Mission::noteMotion(const MotionResult& r, bool leg) {

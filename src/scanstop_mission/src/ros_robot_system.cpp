@@ -185,6 +185,15 @@ ScanResult RosRobotSystem::takeScan(int planes) {
   r.raw_points = srv->response.counts.raw_points;
   r.valid_points = srv->response.counts.valid_points;
   r.planes_dropped = srv->response.counts.planes_dropped;
+  try {
+    PointCloud cloud = ros_conv::fromMsg(srv->response.cloud);  // base_link
+    r.points_base.reserve(cloud.points.size());
+    for (const Eigen::Vector3f& p : cloud.points)
+      if (p.allFinite()) r.points_base.push_back(p);
+  } catch (const std::exception& e) {
+    ROS_WARN("mission: the scan's points cannot be read for the leg check (%s); legs go unchecked until the next scan",
+             e.what());
+  }
   r.payload = srv;
   return r;
 }

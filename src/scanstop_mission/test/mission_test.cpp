@@ -75,6 +75,7 @@ class FakeSystem : public RobotSystem {
   long first_collision = -1;                      // index into motions of the first colliding one
   /// The true clearance a motion reports (simulation), by kind ('r', 'f') and command; unset: none.
   std::function<std::optional<double>(char, double)> clearance_of;
+  bool scan_walls = false;  ///< the scans see the walls (points every 2 cm at 0.1-0.5 m height); else they do not
   std::vector<size_t> forwards_at_plan;           // forwards.size() at each plan
   std::vector<std::vector<Eigen::Vector2d>> plan_contacts;  // the contacts each plan was given
   int scans_taken = 0;
@@ -101,6 +102,17 @@ class FakeSystem : public RobotSystem {
     r.raw_points = planes * 682;
     r.valid_points = r.raw_points * 2 / 3;
     r.payload = truth;  // the "cloud": what SLAM needs to find the true pose
+    if (scan_walls) {
+      const Pose2D inv = truth.inverse();
+      for (const auto& w : walls) {
+        const double len = (w.second - w.first).norm();
+        for (double t = 0.0; t <= len; t += 0.02) {
+          const Eigen::Vector2d q = inv.transformPoint(w.first + (w.second - w.first) * (t / len));
+          for (const float z : {0.1f, 0.3f, 0.5f, 1.5f})
+            r.points_base.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()), z);
+        }
+      }
+    }
     return r;
   }
 
@@ -575,6 +587,41 @@ TEST(Mission, TheTrueClearanceOfEveryMotionIsSummarized) {
   EXPECT_EQ(m2.run(), State::Done);
   EXPECT_FALSE(summarize(m2.snapshot()).has_clearance);
   EXPECT_NE(toJson(summarize(m2.snapshot())).find("\"min_clearance_m\": null"), std::string::npos);
+}
+
+TEST(Mission, TheLegCheckStopsBeforeAnObstacleTheLatestScanShowsAndTheMapDoesNot) {
+  // The fake explorer plans straight through a wall the scans see: the leg check ends the leg
+  // before it (no contact), the target is marked unreachable and the mission goes on.
+  TempDir dir;
+  FakeSystem sys;
+  sys.walls = {{{1.5, -1.0}, {1.5, 1.0}}};
+  sys.targets = {{3.0, 0.0}, {0.0, 2.0}};
+  sys.scan_walls = true;
+  MissionConfig c = config(dir.path());
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  const MissionState s = m.snapshot();
+  EXPECT_EQ(s.collisions, 0);
+  EXPECT_TRUE(s.contacts.empty());
+  ASSERT_EQ(s.unreachable.size(), 1u);
+  EXPECT_TRUE(s.unreachable[0].isApprox(Eigen::Vector2d(3.0, 0.0)));
+  // It stopped leg_check_margin before the body would touch the wall (x = 1.5 - radius - margin).
+  EXPECT_NEAR(sys.forwards.front(), 1.5 - c.leg_check_radius_m - c.leg_check_margin_m, 0.02);
+  bool logged = false;
+  for (const auto& e : s.events) logged = logged || e.what.find("leg check: the latest scan shows an obstruction") == 0;
+  EXPECT_TRUE(logged);
+  EXPECT_TRUE(s.complete);
+  // Off, the same mission drives into the wall.
+  TempDir dir2;
+  FakeSystem off_sys;
+  off_sys.walls = sys.walls;
+  off_sys.targets = sys.targets;
+  off_sys.scan_walls = true;
+  MissionConfig off = config(dir2.path());
+  off.leg_check = false;
+  Mission m2(off, off_sys, quiet, quiet);
+  EXPECT_EQ(m2.run(), State::Done);
+  EXPECT_EQ(m2.snapshot().collisions, 1);
 }
 
 TEST(Mission, ScanBudgetEndsTheMission) {

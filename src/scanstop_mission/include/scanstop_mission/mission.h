@@ -48,6 +48,19 @@ struct MissionConfig {
   /// A safety bound: after this many contacts the mission stops exploring (the map, the mesh and
   /// the report are kept) and ends Failed with the reason, instead of trying again, [1, 1000].
   int max_contacts = 5;
+  /// The safety check before every straight leg: the body (a disc of leg_check_radius_m) swept along
+  /// the leg against the latest scan's points in the body's height band (carried to the robot's
+  /// present pose by odometry; relative to the robot, so SLAM's error does not enter). The leg ends
+  /// leg_check_margin_m before the first place where at least leg_check_min_points points lie in
+  /// the body; a leg shortened so is logged, the target marked unreachable, the robot rescans and
+  /// the mission replans. false: no check (the thesis).
+  bool leg_check = true;
+  double leg_check_radius_m = 0.28;    ///< the body's swept radius plus a margin [m], (0, 2]
+  double leg_check_margin_m = 0.05;    ///< stop this far before the first obstruction [m], [0, 1]
+  double leg_check_min_z_m = 0.03;     ///< the body's height band: from (above the floor layer) [m]
+  double leg_check_max_z_m = 0.6;      ///< ... to (the body's and the mast's height) [m]
+  double leg_check_self_m = 0.3;       ///< scan points this close to base_link are the robot itself [m], [0, 2]
+  int leg_check_min_points = 3;        ///< points that make an obstruction (random readings are single), [1, 1000]
   /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
   static constexpr double kCloseLeg = 0.05;
   int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
@@ -118,6 +131,9 @@ class Mission {
   /// Books a motion's result into the state: modelled time, odometry, true clearance (leg: a
   /// forward motion).
   void noteMotion(const MotionResult& r, bool leg);
+  /// How far the body can drive straight ahead from the present pose before the latest scan's band
+  /// points obstruct it (leg_check); +inf without a scan to check against.
+  double freeTravel() const;
   bool contactBoundReached() const;
   bool checkControl();  ///< waits while paused; false when aborted
   void backoff(int attempt);  ///< waits attempt * retry_backoff_s (returns early on abort)
@@ -130,6 +146,10 @@ class Mission {
 
   MissionConfig config_;
   RobotSystem& robot_;
+  /// The latest scan's points in the body's height band (xy in its base_link) and the odometry
+  /// pose they were taken at (the leg check).
+  std::vector<Eigen::Vector2d> obstacles_;
+  Pose2D obstacles_odom_;
   Log info_, warn_;
   mutable std::mutex mutex_;
   std::condition_variable control_cv_;

@@ -29,6 +29,9 @@ struct ScanResult : StepResult {
   uint32_t valid_points = 0;
   uint32_t planes_dropped = 0;
   std::any payload;           ///< the cloud as the implementation keeps it (handed back to registerScan)
+  /// The scan's finite points in base_link [m] (for the safety check of the legs driven before the
+  /// next scan); may be empty (no check).
+  std::vector<Eigen::Vector3f> points_base;
 };
 
 /// A relative motion, as measured by odometry.
