@@ -4,6 +4,7 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <scanstop_msgs/Forward.h>
+#include <scanstop_msgs/MotionClearance.h>
 #include <scanstop_msgs/ResetSim.h>
 #include <scanstop_msgs/Rotate.h>
 #include <scanstop_msgs/TakeScan.h>
@@ -12,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <future>
+#include <mutex>
 #include <utility>
 #include <vector>
 
@@ -96,7 +98,30 @@ TEST(SimNode, ScanRotateForwardScanAndCollide) {
   rotate.request.angle_rad = M_PI / 2;
   ASSERT_TRUE(call("base/rotate", rotate).response.success);
   forward.request.distance_m = 3.0;
+  // Every motion's true clearance is published before the call is answered: this one ends in contact.
+  std::vector<scanstop_msgs::MotionClearance> clearances;
+  std::mutex clearance_mutex;
+  ros::Subscriber clearance_sub = nh.subscribe<scanstop_msgs::MotionClearance>(
+      "ground_truth/clearance", 10, [&](const scanstop_msgs::MotionClearance::ConstPtr& m) {
+        std::lock_guard<std::mutex> lock(clearance_mutex);
+        clearances.push_back(*m);
+      });
+  for (int i = 0; i < 100 && clearance_sub.getNumPublishers() == 0; ++i) ros::WallDuration(0.05).sleep();
   forward = call("base/forward", forward);
+  const auto received = [&] {
+    std::lock_guard<std::mutex> lock(clearance_mutex);
+    return clearances.size();
+  };
+  for (int i = 0; i < 100 && received() == 0; ++i) ros::WallDuration(0.01).sleep();
+  {
+    std::lock_guard<std::mutex> lock(clearance_mutex);
+    ASSERT_EQ(clearances.size(), 1u);
+    EXPECT_EQ(clearances[0].motion, "forward");
+    EXPECT_DOUBLE_EQ(clearances[0].command, 3.0);
+    EXPECT_TRUE(clearances[0].collision);
+    EXPECT_EQ(clearances[0].min_clearance_m, 0.0);
+  }
+  clearance_sub.shutdown();
   EXPECT_TRUE(forward.response.collision);
   EXPECT_FALSE(forward.response.success);
   EXPECT_NE(forward.response.message.find("collision"), std::string::npos);
