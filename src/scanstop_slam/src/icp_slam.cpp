@@ -25,7 +25,7 @@ void SlamConfig::validate() const {
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
   requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
   requireInRange("max_odom_jump", max_odom_jump_m, 0.01, 100000.0, "m");
-  requireInRange("relax_neighbours", relax_neighbours, 1, 100);
+  requireInRange("relax_neighbours", relax_neighbours, 0, 100);
   requireInRange("relax_loop_candidates", relax_loop_candidates, 0, 100);
   requireInRange("relax_loop_min_gap", relax_loop_min_gap, 2, 100000);
   requireInRange("relax_max_distance", relax_max_distance_m, 1e-6, 1000.0, "m");
@@ -175,7 +175,7 @@ void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>
   std::sort(near.begin(), near.end());
   std::sort(loops.begin(), loops.end());
   std::vector<size_t> candidates;
-  if (j >= 1) candidates.push_back(j - 1);
+  if (j >= 1 && config_.relax_neighbours > 0) candidates.push_back(j - 1);
   for (size_t k = 0; k < near.size() && static_cast<int>(candidates.size()) < config_.relax_neighbours; ++k)
     candidates.push_back(near[k].second);
   // Far-back scans that are among the nearest count as loop candidates too (a robust edge).
@@ -201,13 +201,24 @@ void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>
     ++r.relax_edges;
     if (i + 1 == j) previous_joined = true;
   }
-  if (!previous_joined && j >= 1) {
-    // Keeps the chain joined: the relative pose as the registration against the map (or odometry,
-    // when it failed) left it, weakly (5 cm, 1 deg).
+  if (j >= 1 && r.converged) {
+    // The registration against the map, as an edge from the previous scan: the new scan's pose
+    // relative to where the map holds the previous one, with the information of that registration
+    // (the same stand-in as pairwise edges, over the map). Pairwise registrations of two sparse
+    // scans alone are less accurate than against the map of all earlier scans.
     PoseGraphEdge e;
     e.from = j - 1;
     e.to = j;
-    e.T_from_to = graph.poses()[j - 1].between(pj);
+    e.T_from_to = kept_[j - 1].pose.between(pj);
+    e.information = pairwiseInformation(map_, points, pj.toIsometry3d(), config_.icp);
+    graph.addEdge(e);
+  } else if (!previous_joined && j >= 1) {
+    // Keeps the chain joined: the relative pose as odometry (the registration failed) left it,
+    // weakly (5 cm, 1 deg).
+    PoseGraphEdge e;
+    e.from = j - 1;
+    e.to = j;
+    e.T_from_to = kept_[j - 1].pose.between(pj);
     const double s_m = 0.05, s_rad = 1.0 * M_PI / 180.0;
     e.information = Eigen::Vector3d(1 / (s_m * s_m), 1 / (s_m * s_m), 1 / (s_rad * s_rad)).asDiagonal();
     graph.addEdge(e);

@@ -8,7 +8,9 @@
 /// the registration against the map, the new scan is also registered pairwise against a few
 /// earlier scans that overlap it (the previous one, the nearest ones, and loop candidates: near in
 /// space, far back in index); each accepted pairwise result is an edge of a pose graph over all
-/// scans (pose_graph.h), which is then solved. When that moves a pose farther than
+/// scans (pose_graph.h). The registration against the map is an edge too (from the previous scan,
+/// at the pose the map holds it; when it failed and no pairwise edge joins the previous scan, a weak
+/// odometry edge: 5 cm, 1 deg). The graph is then solved. When that moves a pose farther than
 /// relax_update_m / relax_update_rad from the pose the map holds it at, every moved pose is
 /// applied: poses.csv is rewritten (the replaced poses go to pose_history.csv), and the voxel map
 /// is rebuilt from all scans at their corrected poses (read back from the map directory, or from
@@ -64,7 +66,9 @@ struct SlamConfig {
   // Global relaxation (see the top of this file).
   bool relax = false;  ///< pose graph relaxation after every scan
   /// Pairwise edges per new scan to its nearest earlier scans (pose distance; the previous scan is
-  /// always one of them) [1, 100]
+  /// always one of them), [0, 100]. 0: none; the chain is then the registration against the map
+  /// alone (an edge from the previous scan, always added when that registration converged), and
+  /// pairwise edges join loop candidates only.
   int relax_neighbours = 3;
   /// ... and to up to this many loop candidates: the nearest earlier scans at least
   /// relax_loop_min_gap indices back [0, 100]
@@ -130,8 +134,8 @@ struct Registration {
   double refine_moved_m = 0.0;
   double refine_moved_rad = 0.0;
   bool refine_rejected = false;
-  /// Global relaxation (SlamConfig::relax): pairwise edges tried / accepted for this scan (a
-  /// fallback edge to the previous scan when none to it was accepted is not counted), whether the
+  /// Global relaxation (SlamConfig::relax): pairwise edges tried / accepted for this scan (the
+  /// edge of the registration against the map, or the odometry edge, is not counted), whether the
   /// graph was solved, and whether the result was applied (poses rewritten, map rebuilt).
   int relax_edges_tried = 0;
   int relax_edges = 0;
