@@ -603,6 +603,7 @@ TEST(IcpSlam, RelaxationAddsPairwiseEdgesRewritesPosesAndResumesWithThem) {
   SlamConfig config;
   config.relax = true;
   config.relax_loop_min_gap = 4;
+  config.relax_neighbours = 3;  // pairwise edges to recent scans too
   config.relax_update_m = 0.0;
   config.relax_update_rad = 0.0;
   std::vector<ScanPose> poses;
