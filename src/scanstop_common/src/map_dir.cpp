@@ -24,6 +24,7 @@ const char* const kHeader =
     "index,file,stamp_s,map_x,map_y,map_yaw,odom_x,odom_y,odom_yaw,sensor_x,sensor_y,sensor_z,"
     "converged,iterations,correspondences,rms_m,overlap";
 constexpr size_t kColumns = 17;
+const char* const kHistoryHeader = "index,revision,map_x,map_y,map_yaw";
 constexpr double kMaxIndex = 9999999.0;  // scan_%04u names sort up to 7 digits
 
 /// Creates the directory and any missing parents (like mkdir -p).
@@ -222,6 +223,18 @@ void MapDirectory::load() {
   for (const MapScanInfo& s : all) named_files_.push_back(s.file);
   named_files_.insert(named_files_.end(), mentioned.begin(), mentioned.end());
   setNextIndex(static_cast<uint32_t>(largest + 1));
+  // The last relaxation's revision: the largest in pose_history.csv (lines that do not parse are
+  // left alone; the history is only appended to).
+  const std::string history = poseHistoryPath();
+  if (::stat(history.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+    std::istringstream h(readFile(history));
+    while (std::getline(h, line)) {
+      const std::vector<std::string> f = splitCsv(line);
+      if (f.size() != 5 || f[1].empty() || f[1].size() > 9 || f[1].find_first_not_of("0123456789") != std::string::npos)
+        continue;
+      pose_revision_ = std::max<uint32_t>(pose_revision_, static_cast<uint32_t>(std::stoul(f[1])));
+    }
+  }
 }
 
 void MapDirectory::setNextIndex(uint32_t candidate) {
@@ -259,6 +272,43 @@ void MapDirectory::updateInfo(const MapScanInfo& info) {
     *it = old;
     throw;
   }
+}
+
+uint32_t MapDirectory::updatePoses(const std::vector<std::pair<uint32_t, Pose2D>>& poses) {
+  std::vector<MapScanInfo> updated = scans_;
+  std::ostringstream old_lines;
+  old_lines << std::setprecision(17);
+  const uint32_t revision = pose_revision_ + 1;
+  bool changed = false;
+  for (const auto& entry : poses) {
+    const uint32_t index = entry.first;
+    const Pose2D& pose = entry.second;
+    const auto it = std::find_if(updated.begin(), updated.end(), [&](const MapScanInfo& s) { return s.index == index; });
+    if (it == updated.end())
+      throw IoError(posesPath(), "cannot update the pose of scan " + std::to_string(index) + ": no such scan");
+    if (!pose.isFinite())
+      throw IoError(posesPath(), "cannot update scan " + std::to_string(index) + " to the non-finite pose " + pose.toString());
+    if (it->map_pose.x == pose.x && it->map_pose.y == pose.y && it->map_pose.yaw == pose.yaw) continue;
+    old_lines << index << ',' << revision << ',' << it->map_pose.x << ',' << it->map_pose.y << ',' << it->map_pose.yaw << '\n';
+    it->map_pose = pose;
+    changed = true;
+  }
+  if (!changed) return pose_revision_;
+  const std::string history = poseHistoryPath();
+  struct stat st;
+  std::string text = ::stat(history.c_str(), &st) == 0 ? readFile(history) : std::string();
+  if (text.empty()) text = std::string(kHistoryHeader) + "\n";
+  if (text.back() != '\n') text += '\n';
+  writeFileAtomic(history, text + old_lines.str());
+  std::swap(scans_, updated);
+  try {
+    writePoses();
+  } catch (...) {
+    std::swap(scans_, updated);
+    throw;
+  }
+  pose_revision_ = revision;
+  return revision;
 }
 
 PointCloud MapDirectory::loadScan(size_t i) const {

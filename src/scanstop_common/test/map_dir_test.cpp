@@ -89,6 +89,43 @@ TEST(MapDirectory, UpdateInfoRewritesPoses) {
   EXPECT_DOUBLE_EQ(MapDirectory(tmp.file("m")).scans()[0].map_pose.x, 0.5);
 }
 
+TEST(MapDirectory, UpdatePosesRewritesPosesAndKeepsTheOldOnesInTheHistory) {
+  TempDir tmp;
+  PointCloud cloud;
+  cloud.push_back({1, 0, 0});
+  const std::string dir = tmp.file("m");
+  {
+    MapDirectory map(dir);
+    for (uint32_t i = 0; i < 3; ++i) map.append(info(i, Pose2D(i, 0, 0.1 * i)), cloud);
+    EXPECT_EQ(map.poseRevision(), 0u);
+    // Scan 0's pose is given unchanged: it does not enter the history.
+    EXPECT_EQ(map.updatePoses({{0, Pose2D(0, 0, 0)}, {1, Pose2D(1.5, 0.25, 0.2)}, {2, Pose2D(2.5, -0.5, 0.3)}}), 1u);
+    EXPECT_EQ(map.updatePoses({{2, Pose2D(3.0, -1.0, 0.4)}}), 2u);
+    EXPECT_EQ(map.updatePoses({{2, Pose2D(3.0, -1.0, 0.4)}}), 2u);  // nothing changed: no revision
+    // Unknown scan or non-finite pose: refused, nothing changed.
+    EXPECT_THROW(map.updatePoses({{1, Pose2D(9, 9, 0)}, {7, Pose2D()}}), IoError);
+    EXPECT_THROW(map.updatePoses({{1, Pose2D(NAN, 0, 0)}}), IoError);
+    EXPECT_DOUBLE_EQ(map.scans()[1].map_pose.x, 1.5);
+    EXPECT_EQ(map.poseRevision(), 2u);
+  }
+  MapDirectory map(dir);
+  ASSERT_EQ(map.size(), 3u);
+  EXPECT_TRUE(map.problems().empty());
+  EXPECT_EQ(map.poseRevision(), 2u);  // resumed from pose_history.csv
+  EXPECT_DOUBLE_EQ(map.scans()[0].map_pose.x, 0.0);
+  EXPECT_DOUBLE_EQ(map.scans()[1].map_pose.y, 0.25);
+  EXPECT_DOUBLE_EQ(map.scans()[2].map_pose.x, 3.0);
+  EXPECT_DOUBLE_EQ(map.scans()[2].map_pose.yaw, 0.4);
+  EXPECT_DOUBLE_EQ(map.scans()[2].odom_pose.x, 2.1);  // the rest of the line stays
+  EXPECT_EQ(map.scans()[2].iterations, 9u);
+  EXPECT_EQ(readFile(map.poseHistoryPath()),
+            "index,revision,map_x,map_y,map_yaw\n"
+            "1,1,1,0,0.10000000000000001\n"
+            "2,1,2,0,0.20000000000000001\n"
+            "2,2,2.5,-0.5,0.29999999999999999\n");
+  EXPECT_EQ(map.updatePoses({{0, Pose2D(0.125, 0, 0)}}), 3u);
+}
+
 /// A map of n scans (10 points each) in tmp/m; returns its directory.
 std::string makeMap(const TempDir& tmp, uint32_t n) {
   PointCloud cloud;

@@ -1,5 +1,6 @@
 #include "scanstop_slam/icp_slam.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -24,6 +25,49 @@ void SlamConfig::validate() const {
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
   requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
   requireInRange("max_odom_jump", max_odom_jump_m, 0.01, 100000.0, "m");
+  requireInRange("relax_neighbours", relax_neighbours, 0, 100);
+  requireInRange("relax_loop_candidates", relax_loop_candidates, 0, 100);
+  requireInRange("relax_loop_min_gap", relax_loop_min_gap, 2, 100000);
+  requireInRange("relax_max_distance", relax_max_distance_m, 1e-6, 1000.0, "m");
+  requireInRange("relax_voxel", relax_voxel_m, 0.01, 1.0, "m");
+  requireInRange("relax_min_overlap", relax_min_overlap, 0.0, 1.0);
+  requireInRange("relax_max_rms", relax_max_rms_m, 1e-6, 1.0, "m");
+  requireInRange("relax_update", relax_update_m, 0.0, 10.0, "m");
+  requireInRange("relax_update_angle", relax_update_rad, 0.0, M_PI, "rad");
+  graph.validate();
+}
+
+Eigen::Matrix3d pairwiseInformation(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source,
+                                    const Eigen::Isometry3d& T_target_source, const IcpConfig& config) {
+  constexpr double kEffectivePoints = 50.0;
+  constexpr double kMinSigma = 0.005;  // [m]
+  const bool skip_horizontal = !config.six_dof && config.ignore_horizontal;
+  const Eigen::Isometry3f T = T_target_source.cast<float>();
+  const Eigen::Vector2d t = T_target_source.translation().head<2>();
+  Eigen::Matrix3d JtJ = Eigen::Matrix3d::Zero();
+  double sum_r2 = 0.0;
+  size_t n = 0;
+  for (const Eigen::Vector3f& p : source) {
+    const Eigen::Vector3f q = T * p;
+    Eigen::Vector3f m;
+    float d2 = 0.0f;
+    bool horizontal = false;
+    Surface surface;
+    if (!target.nearest(q, config.c_max_m, m, d2, &horizontal, &surface) || !surface.planar) continue;
+    if (skip_horizontal && horizontal) continue;
+    const Eigen::Vector3d nrm = surface.normal.cast<double>();
+    const Eigen::Vector2d v = q.head<2>().cast<double>() - t;  // R p: d(T p)/d yaw = z x (R p)
+    const Eigen::Vector3d J(nrm.x(), nrm.y(), nrm.x() * -v.y() + nrm.y() * v.x());
+    JtJ += J * J.transpose();
+    const double r = nrm.dot((q - m).cast<double>());
+    sum_r2 += r * r;
+    ++n;
+  }
+  Eigen::Matrix3d info = Eigen::Matrix3d::Identity();
+  if (n == 0) return info;
+  const double sigma = std::max(kMinSigma, std::sqrt(sum_r2 / n));
+  info += JtJ / static_cast<double>(n) * (kEffectivePoints / (sigma * sigma));
+  return 0.5 * (info + info.transpose());
 }
 
 std::string scanProblem(const PointCloud& scan_base, double max_point_distance_m) {
@@ -49,6 +93,8 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
   if (map_dir.empty()) return;
   dir_ = std::make_unique<MapDirectory>(map_dir);
   for (const MapProblem& p : dir_->problems()) skipped_.push_back({p.path, p.problem});
+  // Resume: the earlier session's graph edges are not stored, so its poses stay as they are (fixed
+  // nodes); new scans relax against them.
   for (size_t i = 0; i < dir_->size(); ++i) {
     const MapScanInfo& info = dir_->scans()[i];
     // The pose is kept either way (the trajectory goes on from the last scan).
@@ -68,8 +114,140 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
     }
     const Eigen::Vector3f origin = info.map_pose.toIsometry3f() * info.sensor_origin.cast<float>();
     map_.add(transformCloud(scan, info.map_pose.toIsometry3f()).points, &origin);
+    KeptScan k;
+    k.index = info.index;
+    k.stamp_s = info.stamp_s;
+    k.pose = info.map_pose;
+    k.origin = info.sensor_origin.cast<float>();
+    if (config_.relax) k.points = voxelDownsample(scan.points, config_.relax_voxel_m);
+    kept_.push_back(std::move(k));
+    graph_.setFixed(graph_.addNode(info.map_pose));
   }
   count_ = static_cast<size_t>(dir_->nextIndex());
+}
+
+std::vector<ScanPose> IcpSlam::poses() const {
+  std::vector<ScanPose> out;
+  out.reserve(kept_.size());
+  for (const KeptScan& k : kept_) out.push_back({k.index, k.stamp_s, k.pose});
+  return out;
+}
+
+IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source,
+                                  const Eigen::Isometry3d& start, const Eigen::Vector3f& origin) const {
+  Eigen::Isometry3d from = start;
+  int coarse_iterations = 0;
+  if (config_.coarse_c_max_m > config_.icp.c_max_m) {
+    IcpConfig coarse = config_.icp;
+    coarse.c_max_m = config_.coarse_c_max_m;
+    coarse.t_c_m = std::max(coarse.t_c_m, 0.002);
+    coarse.r_c_rad = std::max(coarse.r_c_rad, 0.1 * M_PI / 180.0);
+    const IcpResult c = icp(target, source, from, coarse, &origin);
+    coarse_iterations = c.iterations;
+    if (c.converged) from = c.T_target_source;
+  }
+  IcpResult result = icp(target, source, from, config_.icp, &origin);
+  result.iterations += coarse_iterations;
+  if (result.converged) {
+    const Eigen::Isometry3d correction = start.inverse() * result.T_target_source;
+    if (correction.translation().norm() > config_.icp.max_correction_m ||
+        Eigen::AngleAxisd(correction.linear()).angle() > config_.icp.max_correction_rad) {
+      result.converged = false;
+      result.failure = "the correction of the initial guess (" + std::to_string(correction.translation().norm()) +
+                       " m) exceeds max_correction";
+    }
+  }
+  return result;
+}
+
+void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>& points,
+                            const Eigen::Vector3f& origin, Registration& r) const {
+  const size_t j = graph.size() - 1;  // the new node
+  const Pose2D& pj = graph.poses()[j];
+  // Candidates: the previous node, the nearest others, the nearest loop candidates.
+  std::vector<std::pair<double, size_t>> near, loops;
+  for (size_t i = 0; i + 1 < j; ++i) {
+    const double d = std::hypot(graph.poses()[i].x - pj.x, graph.poses()[i].y - pj.y);
+    if (d > config_.relax_max_distance_m || kept_[i].points.empty()) continue;
+    const bool loop = static_cast<long>(r.index) - static_cast<long>(kept_[i].index) >= config_.relax_loop_min_gap;
+    (loop ? loops : near).push_back({d, i});
+  }
+  std::sort(near.begin(), near.end());
+  std::sort(loops.begin(), loops.end());
+  std::vector<size_t> candidates;
+  if (j >= 1 && config_.relax_neighbours > 0) candidates.push_back(j - 1);
+  for (size_t k = 0; k < near.size() && static_cast<int>(candidates.size()) < config_.relax_neighbours; ++k)
+    candidates.push_back(near[k].second);
+  // Far-back scans that are among the nearest count as loop candidates too (a robust edge).
+  const size_t before_loops = candidates.size();
+  for (size_t k = 0; k < loops.size() && static_cast<int>(candidates.size() - before_loops) < config_.relax_loop_candidates; ++k)
+    candidates.push_back(loops[k].second);
+  bool previous_joined = false;
+  for (const size_t i : candidates) {
+    if (kept_[i].points.empty()) continue;  // e.g. a resumed scan without relax data
+    ++r.relax_edges_tried;
+    VoxelMap target(config_.icp.c_max_m, config_.max_points_per_voxel, config_.map_spacing_m);
+    target.add(kept_[i].points, &kept_[i].origin);
+    const Pose2D guess = graph.poses()[i].between(pj);
+    const IcpResult pair = registerStages(target, points, guess.toIsometry3d(), origin);
+    if (!pair.converged || pair.overlap < config_.relax_min_overlap || pair.rms_m > config_.relax_max_rms_m) continue;
+    PoseGraphEdge e;
+    e.from = i;
+    e.to = j;
+    e.T_from_to = Pose2D::fromIsometry3d(pair.T_target_source);
+    e.information = pairwiseInformation(target, points, pair.T_target_source, config_.icp);
+    e.robust = static_cast<long>(r.index) - static_cast<long>(kept_[i].index) >= config_.relax_loop_min_gap;
+    graph.addEdge(e);
+    ++r.relax_edges;
+    if (i + 1 == j) previous_joined = true;
+  }
+  if (j >= 1 && r.converged) {
+    // The registration against the map, as an edge from the previous scan: the new scan's pose
+    // relative to where the map holds the previous one, with the information of that registration
+    // (the same stand-in as pairwise edges, over the map). Pairwise registrations of two sparse
+    // scans alone are less accurate than against the map of all earlier scans.
+    PoseGraphEdge e;
+    e.from = j - 1;
+    e.to = j;
+    e.T_from_to = kept_[j - 1].pose.between(pj);
+    e.information = pairwiseInformation(map_, points, pj.toIsometry3d(), config_.icp);
+    graph.addEdge(e);
+  } else if (!previous_joined && j >= 1) {
+    // Keeps the chain joined: the relative pose as odometry (the registration failed) left it,
+    // weakly (5 cm, 1 deg).
+    PoseGraphEdge e;
+    e.from = j - 1;
+    e.to = j;
+    e.T_from_to = kept_[j - 1].pose.between(pj);
+    const double s_m = 0.05, s_rad = 1.0 * M_PI / 180.0;
+    e.information = Eigen::Vector3d(1 / (s_m * s_m), 1 / (s_m * s_m), 1 / (s_rad * s_rad)).asDiagonal();
+    graph.addEdge(e);
+  }
+}
+
+void IcpSlam::rebuildMap() {
+  map_ = VoxelMap(config_.icp.c_max_m, config_.max_points_per_voxel, config_.map_spacing_m);
+  for (const KeptScan& k : kept_) {
+    const Eigen::Isometry3f T = k.pose.toIsometry3f();
+    const Eigen::Vector3f origin = T * k.origin;
+    std::vector<Eigen::Vector3f> in_map;
+    if (dir_) {
+      // The full scan, as a resume would load it (kept_ holds only the scans that loaded).
+      const auto& scans = dir_->scans();
+      const auto it = std::find_if(scans.begin(), scans.end(), [&](const MapScanInfo& s) { return s.index == k.index; });
+      if (it != scans.end()) {
+        try {
+          for (const auto& p : dir_->loadScan(static_cast<size_t>(it - scans.begin())).points)
+            if (p.allFinite()) in_map.push_back(T * p);
+        } catch (const std::exception&) {
+          in_map.clear();
+        }
+      }
+    }
+    if (in_map.empty())
+      for (const auto& p : k.points) in_map.push_back(T * p);
+    map_.add(in_map, &origin);
+  }
 }
 
 std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
@@ -170,6 +348,48 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     r.overlap = icp_result.overlap;
     r.map_pose = r.converged ? Pose2D::fromIsometry3d(icp_result.T_target_source) : r.guess;
   }
+  // Global relaxation: on a copy of the graph, so a scan that cannot be stored changes nothing.
+  PoseGraph graph = graph_;
+  std::vector<Eigen::Vector3f> kept_points;
+  std::vector<std::pair<uint32_t, Pose2D>> updates;  // (scan index, corrected pose) to apply
+  std::vector<size_t> update_nodes;
+  if (config_.relax) {
+    const auto relax_start = std::chrono::steady_clock::now();
+    kept_points = voxelDownsample(scan_base.points, config_.relax_voxel_m);
+    graph.addNode(r.map_pose);
+    try {
+      addRelaxEdges(graph, kept_points, origin, r);
+      const PoseGraphSummary g = graph.optimize(config_.graph);
+      r.relax_solved = g.solved;
+      if (!g.solved) r.relax_problem = "the pose graph was not solved: " + g.message;
+    } catch (const std::exception& e) {
+      r.relax_problem = std::string("relaxation failed: ") + e.what();
+    }
+    if (r.relax_solved) {
+      r.map_pose = graph.poses().back();
+      for (size_t i = 0; i < kept_.size(); ++i) {
+        const Pose2D& p = graph.poses()[i];
+        const double dm = std::hypot(p.x - kept_[i].pose.x, p.y - kept_[i].pose.y);
+        const double dr = std::abs(normalizeAngle(p.yaw - kept_[i].pose.yaw));
+        if (dm > config_.relax_update_m || dr > config_.relax_update_rad) r.relaxed = true;
+      }
+      if (r.relaxed)
+        for (size_t i = 0; i < kept_.size(); ++i) {
+          const Pose2D& p = graph.poses()[i];
+          if (p.x == kept_[i].pose.x && p.y == kept_[i].pose.y && p.yaw == kept_[i].pose.yaw) continue;
+          updates.push_back({kept_[i].index, p});
+          update_nodes.push_back(i);
+          r.relax_max_moved_m = std::max(r.relax_max_moved_m, std::hypot(p.x - kept_[i].pose.x, p.y - kept_[i].pose.y));
+          r.relax_max_moved_rad = std::max(r.relax_max_moved_rad, std::abs(normalizeAngle(p.yaw - kept_[i].pose.yaw)));
+        }
+      r.relax_moved = updates.size();
+    } else {
+      // The graph keeps the node (its edges stay), at the registration's pose.
+      graph = graph_;
+      graph.addNode(r.map_pose);
+    }
+    r.relax_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - relax_start).count();
+  }
   // The whole scan (not only the matching subset) joins the map.
   const Eigen::Isometry3f T_map_base = r.map_pose.toIsometry3f();
   std::vector<Eigen::Vector3f> in_map;
@@ -190,8 +410,31 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     info.overlap = r.overlap;
     dir_->append(info, scan_base);  // throws before the in-memory map changes: nothing half-applied
   }
-  const Eigen::Vector3f origin_map = T_map_base * sensor_origin.cast<float>();
-  map_.add(in_map, &origin_map);
+  KeptScan k;
+  k.index = r.index;
+  k.stamp_s = stamp_s;
+  k.pose = r.map_pose;
+  k.points = std::move(kept_points);
+  k.origin = origin;
+  kept_.push_back(std::move(k));
+  if (config_.relax) graph_ = std::move(graph);
+  else graph_.addNode(r.map_pose);
+  if (!updates.empty()) {
+    const auto apply_start = std::chrono::steady_clock::now();
+    for (size_t u = 0; u < updates.size(); ++u) kept_[update_nodes[u]].pose = updates[u].second;
+    if (dir_) {
+      try {
+        dir_->updatePoses(updates);
+      } catch (const std::exception& e) {
+        r.relax_problem = std::string("the corrected poses were not written: ") + e.what();
+      }
+    }
+    rebuildMap();  // all scans at their corrected poses, this one included
+    r.relax_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - apply_start).count();
+  } else {
+    const Eigen::Vector3f origin_map = T_map_base * sensor_origin.cast<float>();
+    map_.add(in_map, &origin_map);
+  }
   last_map_ = r.map_pose;
   last_odom_ = odom_pose;
   count_ = dir_ ? static_cast<size_t>(dir_->nextIndex()) : count_ + 1;

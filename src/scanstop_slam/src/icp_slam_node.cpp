@@ -70,6 +70,22 @@ class IcpSlamNode {
     optional("ignore_horizontal", config.icp.ignore_horizontal);
     optional("max_point_distance", config.max_point_distance_m);
     optional("max_odom_jump", config.max_odom_jump_m);
+    // Global relaxation (SlamConfig::relax*, icp_slam.h).
+    optional("relax", config.relax);
+    optional("relax_neighbours", config.relax_neighbours);
+    optional("relax_loop_candidates", config.relax_loop_candidates);
+    optional("relax_loop_min_gap", config.relax_loop_min_gap);
+    optional("relax_max_distance", config.relax_max_distance_m);
+    optional("relax_voxel", config.relax_voxel_m);
+    optional("relax_min_overlap", config.relax_min_overlap);
+    optional("relax_max_rms", config.relax_max_rms_m);
+    optional("relax_update", config.relax_update_m);
+    double relax_update_deg = config.relax_update_rad * 180.0 / M_PI;
+    optional("relax_update_deg", relax_update_deg);
+    requireInRange(pnh.resolveName("relax_update_deg"), relax_update_deg, 0.0, 180.0, "deg");
+    config.relax_update_rad = relax_update_deg * M_PI / 180.0;
+    optional("relax_loss", config.graph.loss);
+    optional("relax_loss_scale", config.graph.loss_scale);
     optional("max_cloud_points", max_cloud_points_);
     optional("map_cloud_voxel", map_cloud_voxel_m_);
     optional("sensor_height", sensor_height_m_);
@@ -235,9 +251,26 @@ class IcpSlamNode {
                r.index, r.refine_moved_m * 100, r.refine_moved_rad * 180 / M_PI, slam_->config().refine_max_correction_m * 100,
                slam_->config().refine_max_correction_rad * 180 / M_PI);
 
+    if (slam_->config().relax) {
+      if (r.relaxed)
+        ROS_INFO("icp_slam_node: scan %u: relaxation (%d of %d pairwise edges) moved %zu earlier poses, at most "
+                 "%.1f cm %.2f deg, in %.2f s",
+                 r.index, r.relax_edges, r.relax_edges_tried, r.relax_moved, r.relax_max_moved_m * 100,
+                 r.relax_max_moved_rad * 180 / M_PI, r.relax_time_s);
+      if (!r.relax_problem.empty()) ROS_WARN("icp_slam_node: scan %u: %s", r.index, r.relax_problem.c_str());
+    }
+
     pose_pub_.publish(res.map_pose);
-    publishTf(true);
-    path_.poses.push_back(res.map_pose);
+    publishTf(true);  // map -> odom from the last scan's (corrected) pose
+    if (r.relaxed) {
+      // Earlier poses moved: the whole path anew from the corrected poses.
+      path_.poses.clear();
+      for (const ScanPose& p : slam_->poses())
+        path_.poses.push_back(p.index == r.index ? res.map_pose
+                                                 : ros_conv::toPoseStamped(p.map_pose, map_frame_, ros::Time(p.stamp_s)));
+    } else {
+      path_.poses.push_back(res.map_pose);
+    }
     scanstop_msgs::RegisteredScan out;
     out.header.frame_id = map_frame_;
     out.header.stamp = stamp;

@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "scanstop_common/cloud_io.h"
+#include "scanstop_common/file_util.h"
 #include "scanstop_common/shared_data.h"
 #include "scanstop_slam/icp_slam.h"
 
@@ -584,6 +585,99 @@ std::map<std::string, Eigen::Isometry3d> bunnyPoses() {
     poses[file] = T;
   }
   return poses;
+}
+
+TEST(IcpSlam, RelaxationAddsPairwiseEdgesRewritesPosesAndResumesWithThem) {
+  // A loop of 10 scans in the room with drifting odometry, relaxed after every scan, each change of
+  // a pose applied (relax_update 0): the poses stay on the truth, the graph holds a chain and loop
+  // edges, poses.csv and pose_history.csv follow, and a resume loads exactly the corrected map.
+  std::mt19937 rng(21);
+  const std::vector<Eigen::Vector3f> world = roomPoints(rng, 60000);
+  char pattern[] = "/tmp/scanstop_slam_test_XXXXXX";
+  const std::string dir = mkdtemp(pattern);
+  std::vector<Pose2D> truth;
+  for (int i = 0; i < 10; ++i) {
+    const double a = 2 * M_PI * i / 10;
+    truth.emplace_back(1.2 * std::cos(a) - 1.2, 1.0 * std::sin(a), normalizeAngle(0.6 * a));
+  }
+  SlamConfig config;
+  config.relax = true;
+  config.relax_loop_min_gap = 4;
+  config.relax_neighbours = 3;  // pairwise edges to recent scans too
+  config.relax_update_m = 0.0;
+  config.relax_update_rad = 0.0;
+  std::vector<ScanPose> poses;
+  size_t map_size = 0;
+  {
+    IcpSlam slam(config, dir + "/map");
+    Pose2D odom;
+    int applied = 0;
+    for (size_t i = 0; i < truth.size(); ++i) {
+      PointCloud scan;
+      scan.points = transformed(world, truth[i].toIsometry3d().inverse());
+      std::normal_distribution<float> noise(0.0f, 0.003f);
+      for (auto& q : scan.points) q += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
+      scan.setUnorganized();
+      if (i > 0) {
+        const Pose2D step = truth[i - 1].between(truth[i]);
+        odom = odom * Pose2D(step.x * 1.05, step.y * 1.05, step.yaw + 2.0 * M_PI / 180);
+      }
+      const Registration r = slam.registerScan(scan, odom, Eigen::Vector3d(0, 0, 0.45), i * 40.0);
+      ASSERT_TRUE(r.converged) << "scan " << i << ": " << r.failure;
+      EXPECT_TRUE(r.relax_solved) << "scan " << i << ": " << r.relax_problem;
+      EXPECT_TRUE(r.relax_problem.empty()) << r.relax_problem;
+      if (i > 0) {
+        EXPECT_GE(r.relax_edges, 1) << "scan " << i;
+        EXPECT_LE(r.relax_edges, r.relax_edges_tried);
+        EXPECT_LE(r.relax_edges_tried, config.relax_neighbours + config.relax_loop_candidates);
+      }
+      if (r.relaxed) {
+        ++applied;
+        EXPECT_GT(r.relax_moved, 0u);
+        EXPECT_GT(r.relax_max_moved_m + r.relax_max_moved_rad, 0.0);
+      }
+      EXPECT_EQ(slam.poses().size(), i + 1);
+      EXPECT_EQ(slam.lastMapPose().x, r.map_pose.x);
+    }
+    EXPECT_GT(applied, 0);
+    poses = slam.poses();
+    for (size_t i = 0; i < truth.size(); ++i) {
+      EXPECT_EQ(poses[i].index, i);
+      EXPECT_LT(std::hypot(poses[i].map_pose.x - truth[i].x, poses[i].map_pose.y - truth[i].y), 0.005) << "scan " << i;
+      EXPECT_LT(std::abs(normalizeAngle(poses[i].map_pose.yaw - truth[i].yaw)), 0.1 * M_PI / 180) << "scan " << i;
+    }
+    size_t chain = 0, loops = 0;
+    for (const PoseGraphEdge& e : slam.graph().edges()) {
+      EXPECT_LT(e.from, e.to);
+      chain += e.to == e.from + 1 ? 1 : 0;
+      loops += e.robust ? 1 : 0;
+      EXPECT_EQ(e.robust, e.to - e.from >= 4u);
+    }
+    EXPECT_GE(chain, 2 * (truth.size() - 1));  // to the previous scan: pairwise and the map registration
+    EXPECT_GT(loops, 0u);
+    // The map directory holds the corrected poses; the replaced ones are in the history.
+    const MapDirectory stored(dir + "/map");
+    ASSERT_EQ(stored.size(), truth.size());
+    for (size_t i = 0; i < truth.size(); ++i) {
+      EXPECT_EQ(stored.scans()[i].map_pose.x, poses[i].map_pose.x) << "scan " << i;
+      EXPECT_EQ(stored.scans()[i].map_pose.yaw, poses[i].map_pose.yaw) << "scan " << i;
+    }
+    EXPECT_GT(stored.poseRevision(), 0u);
+    EXPECT_NE(readFile(stored.poseHistoryPath()).find("\n1,"), std::string::npos);
+    map_size = slam.map().size();
+  }
+  // Resume: every scan once, at its corrected pose, and the same map the relaxation rebuilt.
+  IcpSlam resumed(config, dir + "/map");
+  EXPECT_EQ(resumed.scanCount(), truth.size());
+  ASSERT_EQ(resumed.poses().size(), truth.size());
+  for (size_t i = 0; i < truth.size(); ++i) {
+    EXPECT_EQ(resumed.poses()[i].index, i);
+    EXPECT_EQ(resumed.poses()[i].map_pose.x, poses[i].map_pose.x);
+    EXPECT_EQ(resumed.poses()[i].map_pose.y, poses[i].map_pose.y);
+  }
+  EXPECT_EQ(resumed.lastMapPose().x, poses.back().map_pose.x);
+  EXPECT_EQ(resumed.map().size(), map_size);
+  EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
 
 TEST(IcpRealData, BunnyPairFromAPerturbedStartRecoversTheReferencePose) {

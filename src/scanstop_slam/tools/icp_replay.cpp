@@ -3,10 +3,12 @@
 /// would have, with the parameters given here, and prints the corrected poses. With --truth (a
 /// mission_state.yaml holding true_pose per scan, written by mission_node in simulation) it prints
 /// the error of the replayed, the stored and the odometry-only pose against ground truth.
+#include <sys/resource.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -25,7 +27,10 @@ void usage() {
                "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
                "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
                "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
-               "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n";
+               "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n"
+               "                  [--relax] [--relax-neighbours N] [--relax-loop-candidates N] [--relax-loop-min-gap N]\n"
+               "                  [--relax-max-distance M] [--relax-voxel M] [--relax-min-overlap F] [--relax-max-rms M]\n"
+               "                  [--relax-update M] [--relax-update-deg D] [--relax-loss cauchy|huber|none] [--relax-loss-scale S]\n";
 }
 
 /// True poses by scan index (a scan the mission adopted after a crash may have none).
@@ -87,6 +92,18 @@ int main(int argc, char** argv) {
       else if (a == "--map-spacing") config.map_spacing_m = std::stod(next());
       else if (a == "--quiet") quiet = true;
       else if (a == "--no-accelerate") config.icp.accelerate = false;
+      else if (a == "--relax") config.relax = true;
+      else if (a == "--relax-neighbours") config.relax_neighbours = std::stoi(next());
+      else if (a == "--relax-loop-candidates") config.relax_loop_candidates = std::stoi(next());
+      else if (a == "--relax-loop-min-gap") config.relax_loop_min_gap = std::stoi(next());
+      else if (a == "--relax-max-distance") config.relax_max_distance_m = std::stod(next());
+      else if (a == "--relax-voxel") config.relax_voxel_m = std::stod(next());
+      else if (a == "--relax-min-overlap") config.relax_min_overlap = std::stod(next());
+      else if (a == "--relax-max-rms") config.relax_max_rms_m = std::stod(next());
+      else if (a == "--relax-update") config.relax_update_m = std::stod(next());
+      else if (a == "--relax-update-deg") config.relax_update_rad = std::stod(next()) * M_PI / 180.0;
+      else if (a == "--relax-loss") config.graph.loss = next();
+      else if (a == "--relax-loss-scale") config.graph.loss_scale = std::stod(next());
       else throw ConfigError("unknown option " + a);
     }
     config.validate();
@@ -97,13 +114,19 @@ int main(int argc, char** argv) {
     slam::IcpSlam slam(config, out_dir);
     if (slam.scanCount() != 0) throw IoError(out_dir, "already holds scans; give an empty or new --out directory");
     std::vector<Pose2D> poses;
-    double total_s = 0.0, err_sum = 0.0;
+    double total_s = 0.0, err_sum = 0.0, relax_s = 0.0, relax_max_s = 0.0;
+    size_t relaxations = 0, relax_edges = 0, relax_tried = 0;
     size_t err_n = 0, last_truth = 0;
     const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
     for (size_t i = 0; i < n; ++i) {
       const MapScanInfo& info = in.scans()[i];
       const slam::Registration r = slam.registerScan(in.loadScan(i), info.odom_pose, info.sensor_origin, info.stamp_s);
       total_s += r.time_s;
+      relax_s += r.relax_time_s;
+      relax_max_s = std::max(relax_max_s, r.relax_time_s);
+      relaxations += r.relaxed ? 1 : 0;
+      relax_edges += static_cast<size_t>(r.relax_edges);
+      relax_tried += static_cast<size_t>(r.relax_edges_tried);
       poses.push_back(r.map_pose);
       if (!quiet) {
         std::printf("scan %3zu: (%7.3f %7.3f %7.2f deg) %s it %3d rms %5.1f mm %5.2f s", i, r.map_pose.x, r.map_pose.y,
@@ -115,6 +138,12 @@ int main(int argc, char** argv) {
                       posErr(info.odom_pose, *truth[i]) * 100);
         std::printf("\n");
         if (!r.converged) std::printf("          %s\n", r.failure.c_str());
+        if (config.relax)
+          std::printf("          relax: %d/%d pairwise edges, %s%s, %zu poses moved, at most %.1f cm %.2f deg, %.2f s%s%s\n",
+                      r.relax_edges, r.relax_edges_tried, r.relax_solved ? "solved" : "NOT solved",
+                      r.relaxed ? ", applied" : "", r.relax_moved, r.relax_max_moved_m * 100,
+                      r.relax_max_moved_rad * 180 / M_PI, r.relax_time_s, r.relax_problem.empty() ? "" : ": ",
+                      r.relax_problem.c_str());
         if (r.refine_rejected)
           std::printf("          refinement moved %.1f cm, %.2f deg: rejected, the thesis stage's result stands\n",
                       r.refine_moved_m * 100, r.refine_moved_rad * 180.0 / M_PI);
@@ -133,6 +162,36 @@ int main(int argc, char** argv) {
                   posErr(in.scans()[last].odom_pose, *truth[last]) * 100);
     }
     std::printf("\n");
+    if (config.relax)
+      std::printf("relaxation: %zu of %zu scans applied it, %zu of %zu pairwise edges accepted, %.2f s per scan (max %.2f s)\n",
+                  relaxations, n, relax_edges, relax_tried, relax_s / n, relax_max_s);
+    if (err_n > 0) {
+      // Errors over all scans with ground truth: the final poses (after the last relaxation) and the
+      // poses as each scan was registered.
+      const std::vector<slam::ScanPose> final_poses = slam.poses();
+      const auto report = [&](const char* what, const std::function<Pose2D(size_t)>& pose) {
+        double sum2 = 0.0, max = 0.0, sum2_yaw = 0.0, max_yaw = 0.0;
+        size_t m = 0;
+        for (size_t i = 0; i < n; ++i) {
+          if (i >= truth.size() || !truth[i]) continue;
+          const double e = posErr(pose(i), *truth[i]), y = yawErrDeg(pose(i), *truth[i]);
+          sum2 += e * e;
+          sum2_yaw += y * y;
+          max = std::max(max, e);
+          max_yaw = std::max(max_yaw, y);
+          ++m;
+        }
+        std::printf("%-28s over %zu scans: position RMS %6.1f cm max %6.1f cm; yaw RMS %5.2f deg max %5.2f deg\n", what, m,
+                    std::sqrt(sum2 / m) * 100, max * 100, std::sqrt(sum2_yaw / m), max_yaw);
+      };
+      report("error, final poses", [&](size_t i) { return final_poses.at(i).map_pose; });
+      report("error, as registered", [&](size_t i) { return poses[i]; });
+      report("error, stored in MAP_DIR", [&](size_t i) { return in.scans()[i].map_pose; });
+      report("error, odometry", [&](size_t i) { return in.scans()[i].odom_pose; });
+    }
+    struct rusage usage;
+    getrusage(RUSAGE_SELF, &usage);
+    std::printf("peak memory (max RSS) %.0f MB\n", usage.ru_maxrss / 1024.0);
   } catch (const std::exception& e) {
     std::cerr << "icp_replay: " << e.what() << "\n";
     return 1;

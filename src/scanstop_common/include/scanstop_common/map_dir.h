@@ -5,10 +5,13 @@
 /// Layout:
 ///   <dir>/poses.csv            one line per scan (header line first), rewritten atomically per scan
 ///   <dir>/scans/scan_NNNN.pcd  the scan's finite points in the base_link frame at scan time [m]
+///   <dir>/pose_history.csv     (after a global relaxation moved poses: updatePoses) every map pose
+///                              that was replaced, header "index,revision,map_x,map_y,map_yaw"
 /// A scan's points in the map frame are map_pose.toIsometry3f() * p.
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "scanstop_common/cloud.h"
@@ -70,6 +73,19 @@ class MapDirectory {
   /// poses.csv. Throws IoError when there is no such scan.
   void updateInfo(const MapScanInfo& info);
 
+  /// Replaces the map poses of loaded scans (a global relaxation moved them), given as (scan index,
+  /// new map pose) pairs, and rewrites poses.csv atomically. First the poses being replaced are
+  /// appended to pose_history.csv (rewritten atomically too) as revision poseRevision() + 1, so no
+  /// pose is ever lost: an interruption in between leaves a history line whose pose still stands.
+  /// Pairs whose pose equals the stored one exactly are left out of the history. Returns the new
+  /// revision (the old one when nothing changed). Throws IoError, changing nothing in memory, for
+  /// an index that is not a loaded scan, a non-finite pose or a failed write.
+  uint32_t updatePoses(const std::vector<std::pair<uint32_t, Pose2D>>& poses);
+  /// The number of the last updatePoses() revision (also from pose_history.csv when loaded; 0: none).
+  uint32_t poseRevision() const { return pose_revision_; }
+  /// Absolute path of pose_history.csv.
+  std::string poseHistoryPath() const { return dir_ + "/pose_history.csv"; }
+
   /// Loads the scan at position i of scans() in the base_link frame. Throws IoError naming the file.
   PointCloud loadScan(size_t i) const;
   /// Loads the scan at position i transformed into the map frame.
@@ -88,6 +104,7 @@ class MapDirectory {
   std::vector<MapProblem> problems_;
   std::vector<std::string> named_files_;  ///< every scan file a line of poses.csv names
   uint32_t next_index_ = 0;
+  uint32_t pose_revision_ = 0;
 };
 
 /// Transforms every point of a cloud (NaN stays NaN).
