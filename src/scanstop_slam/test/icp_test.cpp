@@ -896,6 +896,47 @@ TEST(IcpRealData, RoomPairPointToPlaneIsWithin2cmOfThePublishedAnswer) {
   EXPECT_FALSE(p.degenerate);
 }
 
+TEST(IcpSlam, RegistrationReportsTheDegeneracyOfTheFinalStage) {
+  // Two scans in a corridor (true poses x = 0 and x = 1 m), odometry 10 cm long on the second:
+  // every stage is degenerate along x and keeps the guess there; in the room the same steps are
+  // well constrained.
+  std::mt19937 rng(41);
+  const std::vector<Eigen::Vector3f> corridor = straightCorridor(rng, -15.0f, 15.0f, 200000, 0.001f);
+  const std::vector<Eigen::Vector3f> room = roomPoints(rng, 60000);
+  const auto run = [&](const std::vector<Eigen::Vector3f>& world, Registration& second) {
+    IcpSlam slam{SlamConfig()};
+    const auto scanAt = [&](const Pose2D& p) {
+      PointCloud scan;
+      scan.points = transformed(world, p.toIsometry3d().inverse());
+      scan.setUnorganized();
+      return scan;
+    };
+    const Registration first = slam.registerScan(scanAt(Pose2D()), Pose2D(), Eigen::Vector3d(0, 0, 0.45));
+    EXPECT_TRUE(std::isnan(first.condition));  // the first scan defines the map: no registration
+    second = slam.registerScan(scanAt(Pose2D(1.0, 0.0, 0.0)), Pose2D(1.1, 0.02, 0.01), Eigen::Vector3d(0, 0, 0.45));
+    std::cout << "second scan at " << second.map_pose.toString() << " (guess " << second.guess.toString()
+              << "), condition " << second.condition << ", weak direction " << second.weak_direction.transpose()
+              << (second.degenerate ? ", degenerate" : "") << (second.remapped ? ", remapped" : "") << std::endl;
+  };
+  Registration c, r;
+  run(corridor, c);
+  run(room, r);
+  ASSERT_TRUE(c.converged) << c.failure;
+  EXPECT_TRUE(c.degenerate);
+  EXPECT_TRUE(c.remapped);
+  ASSERT_EQ(c.weak_direction.size(), 3);
+  EXPECT_GT(c.weak_direction(0), 0.99);
+  EXPECT_NEAR(c.map_pose.x, c.guess.x, 0.002);  // the guess along the corridor
+  EXPECT_NEAR(c.map_pose.y, 0.0, 0.002);
+  EXPECT_NEAR(c.map_pose.yaw, 0.0, 0.05 * M_PI / 180);
+  ASSERT_TRUE(r.converged) << r.failure;
+  EXPECT_FALSE(r.degenerate);
+  EXPECT_FALSE(r.remapped);
+  EXPECT_GT(r.condition, 1.0);
+  EXPECT_LT(r.condition, 100.0);
+  EXPECT_NEAR(r.map_pose.x, 1.0, 0.005);
+}
+
 }  // namespace
 }  // namespace slam
 }  // namespace scanstop

@@ -4,6 +4,7 @@
 /// odometry delta since then. A failed registration keeps the odometry-based pose and is flagged.
 /// The map is written to a map directory after every scan and can be loaded back.
 
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -81,6 +82,15 @@ struct Registration {
   double refine_moved_m = 0.0;
   double refine_moved_rad = 0.0;
   bool refine_rejected = false;
+  /// The information matrix of the final stage (the refinement's when it stands, else the thesis
+  /// stage's; IcpResult): condition [1] (NaN: no planar pair, also for the first scan), degenerate
+  /// (smallest / largest eigenvalue < IcpConfig::degeneracy_ratio), the weak direction (x, y, yaw
+  /// for 3dof; x, y, z, rx, ry, rz for 6dof; empty without information) and whether remapping
+  /// kept the guess along it.
+  double condition = std::numeric_limits<double>::quiet_NaN();
+  bool degenerate = false;
+  Eigen::VectorXd weak_direction;
+  bool remapped = false;
 };
 
 class IcpSlam {
