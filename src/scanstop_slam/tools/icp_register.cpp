@@ -22,10 +22,12 @@ void usage() {
   std::cerr << "usage: icp_register TARGET SOURCE [--init x,y,z,yaw] [--mode 3dof|6dof] [--c-max M]\n"
                "                    [--t-c M] [--r-c-deg D] [--max-iterations N] [--voxel M] [--no-accelerate] [--json]\n"
                "                    [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--no-remap]\n"
+               "                    [--map-voxel M]\n"
                "  TARGET, SOURCE: .pcd, .ply or .xyz point clouds (metres)\n"
                "  --init: initial guess of SOURCE in TARGET's frame (yaw in degrees; default 0,0,0,0)\n"
                "  --voxel: keep one source point per voxel of this size before matching (default 0 = all)\n"
                "  --method: default point_to_point (thesis Algorithm 4)\n"
+               "  --map-voxel: voxel size of TARGET's voxel map, i.e. the scale of its normals (default: c_max)\n"
                "  --degeneracy-ratio: weak direction below this eigenvalue ratio (default 0.01);\n"
                "  --no-remap: move along weak directions too (default: keep the initial guess there)\n";
 }
@@ -51,6 +53,7 @@ int main(int argc, char** argv) {
   slam::IcpConfig config;
   Eigen::Isometry3d init = Eigen::Isometry3d::Identity();
   double voxel = 0.0;
+  double map_voxel = 0.0;  // 0: c_max
   bool json = false;
   try {
     for (int i = 3; i < argc; ++i) {
@@ -74,13 +77,14 @@ int main(int argc, char** argv) {
       else if (a == "--method") config.method = slam::parseIcpMethod(next(), "--method");
       else if (a == "--degeneracy-ratio") config.degeneracy_ratio = std::stod(next());
       else if (a == "--no-remap") config.degeneracy_remap = false;
+      else if (a == "--map-voxel") map_voxel = std::stod(next());
       else throw ConfigError("unknown option " + a);
     }
     config.validate();
     const PointCloud target = readCloud(target_path);
     const PointCloud source = readCloud(source_path);
     const auto start = std::chrono::steady_clock::now();
-    slam::VoxelMap map(config.c_max_m, 1000000);
+    slam::VoxelMap map(map_voxel > 0.0 ? map_voxel : config.c_max_m, 1000000);
     map.add(target.points);
     if (map.size() == 0) throw IoError(target_path, "has no finite points");
     const auto src = slam::voxelDownsample(source.points, voxel);
