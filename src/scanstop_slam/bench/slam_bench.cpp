@@ -6,6 +6,8 @@
 /// The last line is the time of the last scan against the map of all the others.
 ///
 /// usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M (0 = no refinement)]
+///                  [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--degeneracy-remap 0|1]
+/// (cond: the final stage's condition number, * when degenerate.)
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -52,6 +54,7 @@ std::vector<Entry> readList(const std::string& path) {
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::cerr << "usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M]\n"
+                 "                  [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--degeneracy-remap 0|1]\n"
                  "  LIST: lines 'FILE x y yaw' (scan in base_link, true pose in the world [m, rad])\n";
     return 2;
   }
@@ -67,7 +70,12 @@ int main(int argc, char** argv) {
       } else if (a == "--c-max") config.icp.c_max_m = std::stod(v);
       else if (a == "--coarse-c-max") config.coarse_c_max_m = std::stod(v);
       else if (a == "--refine-t-c") config.refine_t_c_m = std::stod(v);
-      else throw ConfigError("unknown option " + a);
+      else if (a == "--method") config.icp.method = slam::parseIcpMethod(v, "--method");
+      else if (a == "--degeneracy-ratio") config.icp.degeneracy_ratio = std::stod(v);
+      else if (a == "--degeneracy-remap") {
+        if (v != "0" && v != "1") throw ConfigError("--degeneracy-remap must be 0 or 1, not " + v);
+        config.icp.degeneracy_remap = v == "1";
+      } else throw ConfigError("unknown option " + a);
     }
     config.validate();
     const std::vector<Entry> list = readList(argv[1]);
@@ -77,10 +85,11 @@ int main(int argc, char** argv) {
       scans.push_back(readCloud(e.file));
       total_points += scans.back().countFinite();
     }
-    std::printf("%zu scans, %.0f finite points per scan on average, mode %s\n", scans.size(),
-                static_cast<double>(total_points) / scans.size(), config.icp.six_dof ? "6dof" : "3dof");
-    std::printf("%5s %9s %8s %5s %10s %10s %12s %12s\n", "scan", "time_s", "iters", "ok", "map_pts", "err_cm",
-                "err_deg", "odom_err_cm");
+    std::printf("%zu scans, %.0f finite points per scan on average, mode %s, %s, remap %s\n", scans.size(),
+                static_cast<double>(total_points) / scans.size(), config.icp.six_dof ? "6dof" : "3dof",
+                slam::toString(config.icp.method).c_str(), config.icp.degeneracy_remap ? "on" : "off");
+    std::printf("%5s %9s %8s %5s %10s %10s %12s %12s %9s\n", "scan", "time_s", "iters", "ok", "map_pts", "err_cm",
+                "err_deg", "odom_err_cm", "cond");
     // Ground truth and odometry relative to the first scan's pose (the map frame).
     const Pose2D origin = list[0].truth;
     slam::IcpSlam slam(config);
@@ -98,10 +107,10 @@ int main(int argc, char** argv) {
       const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (i > 0) sum_time += t;
       last_time = t;
-      std::printf("%5zu %9.3f %8d %5s %10zu %10.2f %12.3f %12.2f\n", i, t, r.iterations, r.converged ? "yes" : "NO",
-                  map_before, std::hypot(r.map_pose.x - truth.x, r.map_pose.y - truth.y) * 100,
+      std::printf("%5zu %9.3f %8d %5s %10zu %10.2f %12.3f %12.2f %8.3g%s\n", i, t, r.iterations,
+                  r.converged ? "yes" : "NO", map_before, std::hypot(r.map_pose.x - truth.x, r.map_pose.y - truth.y) * 100,
                   std::abs(normalizeAngle(r.map_pose.yaw - truth.yaw)) * 180 / M_PI,
-                  std::hypot(odom.x - truth.x, odom.y - truth.y) * 100);
+                  std::hypot(odom.x - truth.x, odom.y - truth.y) * 100, r.condition, r.degenerate ? "*" : "");
     }
     std::printf("registration (scans 1..%zu): mean %.3f s; the last scan against the map of the %zu before it: %.3f s\n",
                 scans.size() - 1, sum_time / (scans.size() - 1), scans.size() - 1, last_time);

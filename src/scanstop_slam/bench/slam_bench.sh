@@ -2,7 +2,8 @@
 # ICP benchmark: (a) the real room pair (../shared/data/rooms, scan2 -> scan1 from the published
 # initial guess) at c_max 0.5 and 0.1 m: our 6dof ICP (icp_register), Open3D's point-to-point
 # registration_icp (python3-open3d) and PCL's IterativeClosestPoint (pcl_icp_bench), all with at
-# most 100 iterations on the full clouds; (b) ICP SLAM on 21 full 400-plane simulated scans of
+# most 100 iterations on the full clouds; our point-to-plane ICP (its time includes building the
+# voxel map with its normals) next to Open3D's (its time includes estimating the target's normals); (b) ICP SLAM on 21 full 400-plane simulated scans of
 # room_10x8 (thesis errors): each registered against all before it (slam_bench).
 # Installs Open3D itself if missing. Usage: bash slam_bench.sh [WORK_DIR]  (after sourcing a devel
 # space with scanstop_slam; part (b) also needs scanstop_sim's scan_world)
@@ -53,6 +54,10 @@ for c in 0.5 0.1; do
   row "ours 6dof" "$ours" "$o"
   row "Open3D" "$o"
   row "PCL" "$pcl" "$o"
+  o_plane=$("$PYTHON" "$O3D" "$T" "$S" --init "$INIT" --c-max "$c" --max-iterations 100 --method point_to_plane)
+  ours_plane=$("$REG" "$T" "$S" --init "$INIT" --mode 6dof --c-max "$c" --max-iterations 100 --method point_to_plane --json || true)
+  row "ours p2plane" "$ours_plane" "$o_plane"
+  row "Open3D p2plane" "$o_plane"
 done
 # Converged to the tolerance (the reference of the gtest IcpRealData.RoomPairAgreesWithOpen3D).
 echo "c_max = 0.5 m, to convergence (Open3D: relative fitness/RMSE 1e-12, 300 iterations; ours: t_c 1e-7 m, r_c 1e-5 deg):"
@@ -61,6 +66,12 @@ ours=$("$REG" "$T" "$S" --init "$INIT" --mode 6dof --c-max 0.5 --max-iterations 
 row "ours 6dof" "$ours" "$o"
 row "Open3D" "$o"
 echo "  Open3D JSON: $o"
+o_plane=$("$PYTHON" "$O3D" "$T" "$S" --init "$INIT" --c-max 0.5 --max-iterations 300 --relative 1e-12 --method point_to_plane)
+ours_plane=$("$REG" "$T" "$S" --init "$INIT" --mode 6dof --c-max 0.5 --max-iterations 1000 --t-c 1e-7 --r-c-deg 1e-5 --method point_to_plane --json || true)
+row "ours p2plane" "$ours_plane" "$o_plane"
+row "Open3D p2plane" "$o_plane"
+echo "  ours p2plane JSON: $ours_plane"
+echo "  Open3D p2plane JSON: $o_plane"
 
 echo "== (b) ICP SLAM: 21 full 400-plane scans of room_10x8 (thesis errors) =="
 SCAN_WORLD="$(command -v scan_world || catkin_find --first-only scanstop_sim scan_world 2>/dev/null || true)"

@@ -354,6 +354,7 @@ void IcpConfig::validate() const {
   requireInRange("min_overlap", min_overlap, 0.0, 1.0);
   requirePositive("max_correction", max_correction_m, "m");
   requirePositive("max_correction_angle", max_correction_rad, "rad");
+  requireInRange("degeneracy_ratio", degeneracy_ratio, 0.0, 1.0);
 }
 
 std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m) {
@@ -377,23 +378,378 @@ std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>&
   return out;
 }
 
+std::string toString(IcpMethod method) {
+  return method == IcpMethod::point_to_plane ? "point_to_plane" : "point_to_point";
+}
+
+IcpMethod parseIcpMethod(const std::string& text, const std::string& name) {
+  requireOneOf(name, text, {"point_to_point", "point_to_plane"});
+  return text == "point_to_plane" ? IcpMethod::point_to_plane : IcpMethod::point_to_point;
+}
+
 namespace {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 /// Pose parameters: translation and rotation vector (rotation scaled by 1 m, so that both parts
 /// weigh alike for a scene of metres).
-Eigen::Matrix<double, 6, 1> params(const Eigen::Isometry3d& T) {
-  Eigen::Matrix<double, 6, 1> p;
+Vector6d params(const Eigen::Isometry3d& T) {
+  Vector6d p;
   const Eigen::AngleAxisd aa(T.linear());
   p << T.translation(), aa.axis() * aa.angle();
   return p;
 }
 
-Eigen::Isometry3d fromParams(const Eigen::Matrix<double, 6, 1>& p) {
+Eigen::Isometry3d fromParams(const Vector6d& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   const double angle = p.tail<3>().norm();
   if (angle > 0.0) T.linear() = Eigen::AngleAxisd(angle, p.tail<3>() / angle).toRotationMatrix();
   T.translation() = p.head<3>();
   return T;
+}
+
+/// The solved pose parameters among the six of params(): 3dof (t_x, t_y, w_z) or all.
+constexpr int kThreeDof[3] = {0, 1, 5};
+Eigen::MatrixXd reduce(const Matrix6d& H, bool six_dof) {
+  if (six_dof) return H;
+  Eigen::MatrixXd out(3, 3);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(r, c) = H(kThreeDof[r], kThreeDof[c]);
+  return out;
+}
+Eigen::VectorXd reduce(const Vector6d& v, bool six_dof) {
+  if (six_dof) return v;
+  return Eigen::Vector3d(v(0), v(1), v(5));
+}
+/// The inverse of reduce() for a vector: the parameters 3dof does not solve are zero.
+Vector6d expand(const Eigen::VectorXd& v, bool six_dof) {
+  if (six_dof) return v;
+  Vector6d out = Vector6d::Zero();
+  for (int r = 0; r < 3; ++r) out(kThreeDof[r]) = v(r);
+  return out;
+}
+
+/// The correspondence step: per source point the nearest map point within c_max that may pair
+/// with it (IcpConfig::same_side, ignore_horizontal, unique_matches), with the map's plane there.
+/// It keeps the per-point state of the exact search shortcuts from one search to the next.
+class Correspondences {
+ public:
+  Correspondences(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const IcpConfig& config,
+                  const Eigen::Vector3f* source_origin, bool normals)
+      : target_(target),
+        source_(source),
+        n_(static_cast<long>(source.size())),
+        c_max_(config.c_max_m),
+        reuse_(config.reuse_search_bounds),
+        side_test_(config.same_side && source_origin != nullptr),
+        normals_(normals),
+        source_origin_(source_origin),
+        matched(source.size()),
+        has(source.size(), 0),
+        horizontal(source.size(), 0),
+        normal(source.size(), Eigen::Vector3f::Zero()),
+        dist2_(config.unique_matches ? source.size() : 0),
+        hit_(source.size(), 0),
+        bounded_(source.size(), 0),
+        anchor_(reuse_ ? source.size() : 0),
+        lower_(reuse_ ? source.size() : 0) {}
+
+  /// The search at pose T (has, matched, horizontal; normal when asked for normals: the map's
+  /// plane normal of a pair, zero where its voxel is not planar). skip_horizontal drops pairs on
+  /// horizontal voxels; unique keeps one source point per map point. Returns the number of pairs.
+  size_t find(const Eigen::Isometry3d& T, bool skip_horizontal, bool unique) {
+    const Eigen::Isometry3f Tf = T.cast<float>();
+    const Eigen::Vector3f origin = side_test_ ? Eigen::Vector3f(Tf * *source_origin_) : Eigen::Vector3f::Zero();
+    // Correspondences (parallel): nearest map point within c_max of each transformed source point.
+#pragma omp parallel for schedule(dynamic, 2048)
+    for (long i = 0; i < n_; ++i) {
+      float d2;
+      bool horiz = false;
+      Surface s;
+      has[i] = pair(i, Tf * source_[i], origin, d2, horiz, normals_ ? &s : nullptr) && !(skip_horizontal && horiz) ? 1 : 0;
+      horizontal[i] = horiz ? 1 : 0;
+      if (normals_) normal[i] = has[i] && s.planar ? s.normal : Eigen::Vector3f::Zero();
+      if (unique) dist2_[i] = d2;
+    }
+    if (unique) {
+      // Of the source points paired with one map point (equal coordinates: the same stored point)
+      // only the nearest keeps it (ties: the lower index, so the result does not depend on threads).
+      order_.clear();
+      for (long i = 0; i < n_; ++i)
+        if (has[i]) order_.push_back(static_cast<uint32_t>(i));
+      std::sort(order_.begin(), order_.end(), [&](uint32_t a, uint32_t b) {
+        const Eigen::Vector3f& p = matched[a];
+        const Eigen::Vector3f& q = matched[b];
+        if (p.x() != q.x()) return p.x() < q.x();
+        if (p.y() != q.y()) return p.y() < q.y();
+        if (p.z() != q.z()) return p.z() < q.z();
+        return dist2_[a] != dist2_[b] ? dist2_[a] < dist2_[b] : a < b;
+      });
+      for (size_t k = 1; k < order_.size(); ++k)
+        if (matched[order_[k]] == matched[order_[k - 1]]) has[order_[k]] = 0;
+    }
+    size_t count = 0;
+    for (long i = 0; i < n_; ++i) count += has[i];
+    return count;
+  }
+
+  /// The final figures at pose T: every pair (no horizontal skip, no uniqueness), the sum of their
+  /// squared distances and their number; has, matched, horizontal and normal as find() sets them.
+  void final(const Eigen::Isometry3d& T, double& sum2, size_t& count) {
+    sum2 = 0.0;
+    count = 0;
+    const Eigen::Isometry3f Tf = T.cast<float>();
+    const Eigen::Vector3f origin = side_test_ ? Eigen::Vector3f(Tf * *source_origin_) : Eigen::Vector3f::Zero();
+#pragma omp parallel for reduction(+ : sum2, count) schedule(dynamic, 2048)
+    for (long i = 0; i < n_; ++i) {
+      float d2;
+      bool horiz = false;
+      Surface s;
+      has[i] = pair(i, Tf * source_[i], origin, d2, horiz, &s) ? 1 : 0;
+      horizontal[i] = horiz ? 1 : 0;
+      normal[i] = has[i] && s.planar ? s.normal : Eigen::Vector3f::Zero();
+      if (has[i]) {
+        sum2 += d2;
+        ++count;
+      }
+    }
+  }
+
+ private:
+  // Exact shortcuts of the correspondence search, from what the last search of each point found.
+  // A hit (its nearest map point m within c_max): m is a map point, so the nearest one now is no
+  // farther than |q - m|, and that radius (padded against rounding) replaces c_max. A miss is
+  // searched out to c_max + miss_margin; the distance of the nearest point found beyond c_max
+  // (or that radius when there is none) is a lower bound at the searched position (anchor), and
+  // while the point has moved less than that bound minus c_max from there it still has no match
+  // within c_max and is not searched at all. Either way the result is the nearest map point within
+  // c_max, as the full search finds it (poses identical up to exact distance ties).
+  /// The nearest map point within c_max of q (point i transformed); its squared distance in d2.
+  bool correspond(long i, const Eigen::Vector3f& q, float& d2, bool& horiz, Surface* surface) {
+    if (!reuse_) return target_.nearest(q, c_max_, matched[i], d2, &horiz, surface);
+    const float c_max_f = static_cast<float>(c_max_);
+    const float c_max2_f = static_cast<float>(c_max_ * c_max_);  // nearest()'s own bound for radius c_max
+    const double miss_margin = 0.5 * c_max_;
+    // Rounding allowance of the float distances and of nearest()'s voxel boxes [m].
+    const float eps = 1e-4f + 1e-6f * q.cwiseAbs().maxCoeff();
+    if (hit_[i]) {
+      const float d_last = (q - matched[i]).norm();
+      // matched[i] lies within the radius, so this finds a point (the nearest one).
+      if (d_last < c_max_f &&
+          target_.nearest(q, std::min(c_max_, static_cast<double>(d_last + eps)), matched[i], d2, &horiz, surface))
+        return true;
+    } else if (bounded_[i] && lower_[i] - (q - anchor_[i]).norm() >= c_max_f + eps) {
+      return false;
+    }
+    const double radius = c_max_ + miss_margin;
+    Eigen::Vector3f m;
+    const bool found = target_.nearest(q, radius, m, d2, &horiz, surface);
+    if (found && d2 < c_max2_f) {
+      matched[i] = m;
+      hit_[i] = 1;
+      bounded_[i] = 0;
+      return true;
+    }
+    hit_[i] = 0;
+    bounded_[i] = 1;
+    anchor_[i] = q;
+    lower_[i] = found ? std::sqrt(d2) : static_cast<float>(radius);
+    return false;
+  }
+  /// Same side (IcpConfig::same_side): where the map point's voxel is one plane and both points'
+  /// viewing directions are known and clear of it (more than ~6 deg), they must lie on the same side.
+  static bool sameSide(const Eigen::Vector3f& q, const Eigen::Vector3f& origin, const Surface& s) {
+    if (!s.planar) return true;
+    const float map_side = s.normal.dot(s.view);
+    const Eigen::Vector3f to_sensor = origin - q;
+    const float n = to_sensor.norm();
+    if (!(n > 0.0f)) return true;
+    const float source_side = s.normal.dot(to_sensor) / n;
+    constexpr float kClear = 0.1f;
+    return !((map_side > kClear && source_side < -kClear) || (map_side < -kClear && source_side > kClear));
+  }
+  /// The nearest map point within c_max that may pair with point i (at q; origin: the source's
+  /// sensor in the map frame); surface (when given) its plane.
+  bool pair(long i, const Eigen::Vector3f& q, const Eigen::Vector3f& origin, float& d2, bool& horiz, Surface* surface) {
+    Surface local;
+    Surface* s = surface ? surface : (side_test_ ? &local : nullptr);
+    if (!correspond(i, q, d2, horiz, s)) return false;
+    return !side_test_ || sameSide(q, origin, *s);
+  }
+
+  const VoxelMap& target_;
+  const std::vector<Eigen::Vector3f>& source_;
+  const long n_;
+  const double c_max_;
+  const bool reuse_;
+  const bool side_test_;
+  const bool normals_;
+  const Eigen::Vector3f* source_origin_;
+
+ public:
+  std::vector<Eigen::Vector3f> matched;  ///< the pair's map point (valid where has)
+  std::vector<uint8_t> has;              ///< point i has a pair
+  std::vector<uint8_t> horizontal;       ///< its map point's voxel is horizontal
+  std::vector<Eigen::Vector3f> normal;   ///< its map point's plane normal (zero: not planar)
+
+ private:
+  std::vector<float> dist2_;         // of each pair (unique_matches)
+  std::vector<uint32_t> order_;      // pairs sorted by map point
+  std::vector<uint8_t> hit_;         // last search: a map point within c_max (matched[i])
+  std::vector<uint8_t> bounded_;     // last search: a miss with a lower bound
+  std::vector<Eigen::Vector3f> anchor_;
+  std::vector<float> lower_;         // nearest map point distance at anchor >= this [m]
+};
+
+/// One step of thesis Algorithm 4 from the `count` pairs at pose T: the update delta, applied as
+/// delta * T (map frame). Centroids and correlation in double, relative to the current pose (the
+/// transformed source points are recomputed in double: float rounding would keep the
+/// per-iteration change from ever falling below tight t_c / r_c).
+Eigen::Isometry3d pointToPointStep(const std::vector<Eigen::Vector3f>& source, const Correspondences& pairs,
+                                   const Eigen::Isometry3d& T, size_t count, bool six_dof) {
+  const long n = static_cast<long>(source.size());
+  Eigen::Vector3d cd = Eigen::Vector3d::Zero(), cm = Eigen::Vector3d::Zero();
+  for (long i = 0; i < n; ++i) {
+    if (!pairs.has[i]) continue;
+    cd += T * source[i].cast<double>();
+    cm += pairs.matched[i].cast<double>();
+  }
+  cd /= count;
+  cm /= count;
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (long i = 0; i < n; ++i) {
+    if (!pairs.has[i]) continue;
+    H += (T * source[i].cast<double>() - cd) * (pairs.matched[i].cast<double>() - cm).transpose();
+  }
+  // Rotation from the SVD of the correlation matrix (Algorithm 4, lines 9-11): R = V U^T.
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  if (six_dof) {
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+    R = svd.matrixV() * D * svd.matrixU().transpose();
+  } else {
+    const Eigen::Matrix2d H2 = H.topLeftCorner<2, 2>();
+    Eigen::JacobiSVD<Eigen::Matrix2d> svd(H2, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix2d D = Eigen::Matrix2d::Identity();
+    D(1, 1) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+    R.topLeftCorner<2, 2>() = svd.matrixV() * D * svd.matrixU().transpose();
+  }
+  Eigen::Vector3d t = cm - R * cd;
+  if (!six_dof) t.z() = 0.0;
+  Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
+  delta.linear() = R;
+  delta.translation() = t;
+  return delta;
+}
+
+/// Gauss-Newton normal equations of the point-to-plane residuals r = n . (T p - m) over the pairs
+/// with a planar normal (skip_horizontal: not on horizontal voxels), for the perturbation
+/// T * [R(w), t] (params() order): J = [R^T n, p x R^T n], H = sum J^T J, g = sum J^T r. Also the
+/// first and second moments of those pairs' source points (for normalization()).
+struct PlaneEquations {
+  Matrix6d H = Matrix6d::Zero();
+  Vector6d g = Vector6d::Zero();
+  size_t count = 0;
+  Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
+  Eigen::Vector3d sum_p2 = Eigen::Vector3d::Zero();  ///< per axis
+};
+PlaneEquations planeEquations(const std::vector<Eigen::Vector3f>& source, const Correspondences& pairs,
+                              const Eigen::Isometry3d& T, bool skip_horizontal) {
+  PlaneEquations e;
+  const Eigen::Matrix3d Rt = T.linear().transpose();
+  for (size_t i = 0; i < source.size(); ++i) {
+    if (!pairs.has[i] || (skip_horizontal && pairs.horizontal[i])) continue;
+    const Eigen::Vector3d n = pairs.normal[i].cast<double>();
+    if (n.squaredNorm() == 0.0) continue;  // not planar
+    const Eigen::Vector3d p = source[i].cast<double>();
+    const double r = n.dot(T * p - pairs.matched[i].cast<double>());
+    const Eigen::Vector3d nb = Rt * n;
+    Vector6d J;
+    J << nb, p.cross(nb);
+    e.H.noalias() += J * J.transpose();
+    e.g += J * r;
+    e.sum_p += p;
+    e.sum_p2 += p.cwiseProduct(p);
+    ++e.count;
+  }
+  return e;
+}
+
+/// The normalized pose parameters of the eigen-analysis: translation, and rotation about the
+/// pairs' centroid c (source frame) times their RMS distance L from it (3dof: horizontal
+/// distance), both in metres. Returns A with (pose parameters) = A (normalized parameters):
+/// t = t' + c x w, w = u / L. So the eigenvalues compare geometry, not units or the place of the
+/// source frame's origin (a rotation about a far origin is mostly a translation).
+Eigen::MatrixXd normalization(const PlaneEquations& e, bool six_dof) {
+  const double n = static_cast<double>(std::max<size_t>(e.count, 1));
+  const Eigen::Vector3d c = e.sum_p / n;
+  const Eigen::Vector3d var = (e.sum_p2 / n - c.cwiseProduct(c)).cwiseMax(0.0);
+  double L = std::sqrt(six_dof ? var.sum() : var.x() + var.y());
+  if (!(L > 1e-9)) L = 1.0;
+  if (!six_dof) {
+    Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
+    A(0, 2) = c.y() / L;  // (c x w z)_x = c_y w
+    A(1, 2) = -c.x() / L;
+    A(2, 2) = 1.0 / L;
+    return A;
+  }
+  Eigen::MatrixXd A = Eigen::MatrixXd::Identity(6, 6);
+  Eigen::Matrix3d cx;
+  cx << 0, -c.z(), c.y(), c.z(), 0, -c.x(), -c.y(), c.x(), 0;
+  A.topRightCorner(3, 3) = cx / L;
+  A.bottomRightCorner(3, 3) = Eigen::Matrix3d::Identity() / L;
+  return A;
+}
+
+/// Eigen-decomposition of an information matrix H (pose parameters) in the normalized parameters
+/// of A (A^T H A, ascending), and its weak directions: eigenvalues below ratio times the largest
+/// (the first `weak` columns).
+struct Spectrum {
+  Eigen::MatrixXd A;
+  Eigen::VectorXd values;
+  Eigen::MatrixXd vectors;
+  int weak = 0;
+  double largest() const { return values(values.size() - 1); }
+};
+Spectrum spectrum(const Eigen::MatrixXd& H, const Eigen::MatrixXd& A, double ratio) {
+  Spectrum s;
+  s.A = A;
+  const Eigen::MatrixXd Hn = A.transpose() * H * A;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (Hn + Hn.transpose()));
+  s.values = eig.eigenvalues();
+  s.vectors = eig.eigenvectors();
+  const double bound = ratio * s.largest();
+  while (s.weak < s.values.size() && s.values(s.weak) < bound) ++s.weak;
+  return s;
+}
+Spectrum spectrum(const PlaneEquations& e, bool six_dof, double ratio) {
+  return spectrum(reduce(e.H, six_dof), normalization(e, six_dof), ratio);
+}
+
+/// IcpResult's information fields from the point-to-plane equations at the result.
+void summarize(IcpResult& result, const PlaneEquations& e, bool six_dof, double ratio) {
+  result.information_pairs = e.count;
+  result.information.resize(0, 0);
+  result.eigenvalues.resize(0);
+  result.weak_direction.resize(0);
+  result.condition = std::numeric_limits<double>::quiet_NaN();
+  result.degenerate = false;
+  result.weak_directions = 0;
+  if (e.count == 0) return;
+  result.information = reduce(e.H, six_dof);
+  const Spectrum s = spectrum(e, six_dof, ratio);
+  result.eigenvalues = s.values;
+  const double smallest = s.values(0);
+  result.condition = smallest > 0.0 ? s.largest() / smallest : std::numeric_limits<double>::infinity();
+  Eigen::VectorXd v = (s.A * s.vectors.col(0)).normalized();  // in the pose parameters
+  Eigen::Index k;
+  v.cwiseAbs().maxCoeff(&k);
+  if (v(k) < 0.0) v = -v;
+  result.weak_direction = v;
+  result.weak_directions = s.weak;
+  result.degenerate = s.weak > 0;
 }
 
 }  // namespace
@@ -403,171 +759,65 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   IcpResult result;
   Eigen::Isometry3d T = T_init;
   const long n = static_cast<long>(source.size());
-  std::vector<Eigen::Vector3f> matched(source.size());
-  std::vector<uint8_t> has(source.size(), 0);
-  std::vector<float> dist2(config.unique_matches ? source.size() : 0);  // of each pair (unique_matches)
-  std::vector<uint32_t> order;                                          // pairs sorted by map point
-  const double c_max = config.c_max_m;
-  // Exact shortcuts of the correspondence search, from what the last search of each point found.
-  // A hit (its nearest map point m within c_max): m is a map point, so the nearest one now is no
-  // farther than |q - m|, and that radius (padded against rounding) replaces c_max. A miss is
-  // searched out to c_max + miss_margin; the distance of the nearest point found beyond c_max
-  // (or that radius when there is none) is a lower bound at the searched position (anchor), and
-  // while the point has moved less than that bound minus c_max from there it still has no match
-  // within c_max and is not searched at all. Either way the result is the nearest map point within
-  // c_max, as the full search finds it (poses identical up to exact distance ties).
-  const bool reuse = config.reuse_search_bounds;
-  const float c_max_f = static_cast<float>(c_max);
-  const float c_max2_f = static_cast<float>(c_max * c_max);  // nearest()'s own bound for radius c_max
-  const double miss_margin = 0.5 * c_max;
-  std::vector<uint8_t> hit(source.size(), 0);     // last search: a map point within c_max (matched[i])
-  std::vector<uint8_t> bounded(source.size(), 0); // last search: a miss with a lower bound
-  std::vector<Eigen::Vector3f> anchor(reuse ? source.size() : 0);
-  std::vector<float> lower(reuse ? source.size() : 0);  // nearest map point distance at anchor >= this [m]
-  // The nearest map point within c_max of q (point i transformed); its squared distance in d2.
-  const auto correspond = [&](long i, const Eigen::Vector3f& q, float& d2, bool& horizontal, Surface* surface) -> bool {
-    if (!reuse) return target.nearest(q, c_max, matched[i], d2, &horizontal, surface);
-    // Rounding allowance of the float distances and of nearest()'s voxel boxes [m].
-    const float eps = 1e-4f + 1e-6f * q.cwiseAbs().maxCoeff();
-    if (hit[i]) {
-      const float d_last = (q - matched[i]).norm();
-      // matched[i] lies within the radius, so this finds a point (the nearest one).
-      if (d_last < c_max_f &&
-          target.nearest(q, std::min(c_max, static_cast<double>(d_last + eps)), matched[i], d2, &horizontal, surface))
-        return true;
-    } else if (bounded[i] && lower[i] - (q - anchor[i]).norm() >= c_max_f + eps) {
-      return false;
-    }
-    const double radius = c_max + miss_margin;
-    Eigen::Vector3f m;
-    const bool found = target.nearest(q, radius, m, d2, &horizontal, surface);
-    if (found && d2 < c_max2_f) {
-      matched[i] = m;
-      hit[i] = 1;
-      bounded[i] = 0;
-      return true;
-    }
-    hit[i] = 0;
-    bounded[i] = 1;
-    anchor[i] = q;
-    lower[i] = found ? std::sqrt(d2) : static_cast<float>(radius);
-    return false;
-  };
-  // Same side (IcpConfig::same_side): where the map point's voxel is one plane and both points'
-  // viewing directions are known and clear of it (more than ~6 deg), they must lie on the same side.
-  const bool side_test = config.same_side && source_origin != nullptr;
-  const auto sameSide = [&](const Eigen::Vector3f& q, const Eigen::Vector3f& origin, const Surface& s) {
-    if (!s.planar) return true;
-    const float map_side = s.normal.dot(s.view);
-    const Eigen::Vector3f to_sensor = origin - q;
-    const float n = to_sensor.norm();
-    if (!(n > 0.0f)) return true;
-    const float source_side = s.normal.dot(to_sensor) / n;
-    constexpr float kClear = 0.1f;
-    return !((map_side > kClear && source_side < -kClear) || (map_side < -kClear && source_side > kClear));
-  };
-  // The nearest map point within c_max that may pair with point i (at q; origin: the source's
-  // sensor in the map frame).
-  const auto pair = [&](long i, const Eigen::Vector3f& q, const Eigen::Vector3f& origin, float& d2,
-                        bool& horizontal) -> bool {
-    Surface s;
-    if (!correspond(i, q, d2, horizontal, side_test ? &s : nullptr)) return false;
-    return !side_test || sameSide(q, origin, s);
-  };
-  Eigen::Matrix<double, 6, 1> last_step = Eigen::Matrix<double, 6, 1>::Zero();
+  const bool plane = config.method == IcpMethod::point_to_plane;
+  Correspondences pairs(target, source, config, source_origin, plane);
   const bool skip_horizontal = !config.six_dof && config.ignore_horizontal;
-  Eigen::Matrix<double, 6, 1> last_params = params(T);
+  Vector6d last_step = Vector6d::Zero();
+  Vector6d last_params = params(T);
   for (int it = 1; it <= config.max_iterations; ++it) {
     result.iterations = it;
-    const Eigen::Isometry3f Tf = T.cast<float>();
-    const Eigen::Vector3f origin = side_test ? Eigen::Vector3f(Tf * *source_origin) : Eigen::Vector3f::Zero();
-    // Correspondences (parallel): nearest map point within c_max of each transformed source point.
-#pragma omp parallel for schedule(dynamic, 2048)
-    for (long i = 0; i < n; ++i) {
-      float d2;
-      bool horizontal = false;
-      has[i] = pair(i, Tf * source[i], origin, d2, horizontal) && !(skip_horizontal && horizontal) ? 1 : 0;
-      if (config.unique_matches) dist2[i] = d2;
-    }
-    if (config.unique_matches) {
-      // Of the source points paired with one map point (equal coordinates: the same stored point)
-      // only the nearest keeps it (ties: the lower index, so the result does not depend on threads).
-      order.clear();
-      for (long i = 0; i < n; ++i)
-        if (has[i]) order.push_back(static_cast<uint32_t>(i));
-      std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        const Eigen::Vector3f& p = matched[a];
-        const Eigen::Vector3f& q = matched[b];
-        if (p.x() != q.x()) return p.x() < q.x();
-        if (p.y() != q.y()) return p.y() < q.y();
-        if (p.z() != q.z()) return p.z() < q.z();
-        return dist2[a] != dist2[b] ? dist2[a] < dist2[b] : a < b;
-      });
-      for (size_t k = 1; k < order.size(); ++k)
-        if (matched[order[k]] == matched[order[k - 1]]) has[order[k]] = 0;
-    }
-    // Centroids and correlation (in double, relative to the current pose).
-    // (The transformed source points are recomputed in double: float rounding would keep the
-    // per-iteration change from ever falling below tight t_c / r_c.)
-    Eigen::Vector3d cd = Eigen::Vector3d::Zero(), cm = Eigen::Vector3d::Zero();
-    size_t count = 0;
-    for (long i = 0; i < n; ++i) {
-      if (!has[i]) continue;
-      cd += T * source[i].cast<double>();
-      cm += matched[i].cast<double>();
-      ++count;
-    }
+    const size_t count = pairs.find(T, skip_horizontal, config.unique_matches);
     result.correspondences = count;
     result.overlap = n > 0 ? static_cast<double>(count) / n : 0.0;
-    if (count < static_cast<size_t>(config.min_correspondences)) {
-      result.failure = "too few correspondences (" + std::to_string(count) + " < " +
-                       std::to_string(config.min_correspondences) + ") within c_max = " + std::to_string(c_max) + " m";
+    // Point-to-plane: the pairs with a planar normal are the ones that count.
+    const PlaneEquations eq = plane ? planeEquations(source, pairs, T, skip_horizontal) : PlaneEquations();
+    const size_t used = plane ? eq.count : count;
+    if (used < static_cast<size_t>(config.min_correspondences)) {
+      result.failure = "too few " + std::string(plane ? "planar " : "") + "correspondences (" + std::to_string(used) +
+                       " < " + std::to_string(config.min_correspondences) + ") within c_max = " +
+                       std::to_string(config.c_max_m) + " m";
       result.T_target_source = T_init;
       return result;
     }
-    cd /= count;
-    cm /= count;
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    for (long i = 0; i < n; ++i) {
-      if (!has[i]) continue;
-      H += (T * source[i].cast<double>() - cd) * (matched[i].cast<double>() - cm).transpose();
+    if (plane) {
+      // Gauss-Newton step H d = -g, solved in H's eigenbasis. With degeneracy_remap the weak
+      // directions get no step (solution remapping: the step projected onto the well-constrained
+      // subspace); without it only numerically null directions (< 1e-12 of the largest) are left
+      // out, so that a singular H gives a finite step.
+      // (In the normalized parameters of the eigen-analysis: H_n = A^T H A, g_n = A^T g, d = A d_n.)
+      const Spectrum s = spectrum(eq, config.six_dof, config.degeneracy_ratio);
+      const Eigen::VectorXd g = s.A.transpose() * reduce(eq.g, config.six_dof);
+      const int first = config.degeneracy_remap ? s.weak : 0;
+      if (first > 0) result.remapped = true;
+      Eigen::VectorXd d = Eigen::VectorXd::Zero(g.size());
+      for (int k = first; k < s.values.size(); ++k)
+        if (s.values(k) > 1e-12 * s.largest()) d -= s.vectors.col(k) * (s.vectors.col(k).dot(g) / s.values(k));
+      const Vector6d d6 = expand(s.A * d, config.six_dof);
+      T = T * fromParams(d6);
+      if (d6.head<3>().norm() < config.t_c_m && d6.tail<3>().norm() < config.r_c_rad) {
+        result.converged = true;
+        break;
+      }
+      continue;
     }
-    // Rotation from the SVD of the correlation matrix (Algorithm 4, lines 9-11): R = V U^T.
-    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-    if (config.six_dof) {
-      Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-      D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-      R = svd.matrixV() * D * svd.matrixU().transpose();
-    } else {
-      const Eigen::Matrix2d H2 = H.topLeftCorner<2, 2>();
-      Eigen::JacobiSVD<Eigen::Matrix2d> svd(H2, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::Matrix2d D = Eigen::Matrix2d::Identity();
-      D(1, 1) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-      R.topLeftCorner<2, 2>() = svd.matrixV() * D * svd.matrixU().transpose();
-    }
-    Eigen::Vector3d t = cm - R * cd;
-    if (!config.six_dof) t.z() = 0.0;
-    Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
-    delta.linear() = R;
-    delta.translation() = t;
+    const Eigen::Isometry3d delta = pointToPointStep(source, pairs, T, count, config.six_dof);
     T = delta * T;
-    const double dt = t.norm();
-    const double dr = Eigen::AngleAxisd(R).angle();
+    const double dt = delta.translation().norm();
+    const double dr = Eigen::AngleAxisd(delta.linear()).angle();
     // Besl and McKay's accelerated ICP (1992, section IV.C), linear form: point-to-point ICP
     // creeps towards the optimum in ever smaller steps along a nearly constant direction, so a
     // small step alone does not mean it has arrived (the thesis' criterion stops tenths of a
     // degree short). When two successive steps point the same way (within 10 deg) and shrink by
     // the ratio rho, the rest of the geometric series, step * rho / (1 - rho) (at most 25 steps),
     // is taken at once, and convergence is declared only when that rest is below t_c and r_c too.
-    const Eigen::Matrix<double, 6, 1> p = params(T);
-    const Eigen::Matrix<double, 6, 1> step = p - last_params;
+    const Vector6d p = params(T);
+    const Vector6d step = p - last_params;
     last_params = p;
     if (config.accelerate && last_step.norm() > 0.0 && step.norm() > 0.0 && p.tail<3>().norm() < 3.0) {
       const double cos_angle = step.dot(last_step) / (step.norm() * last_step.norm());
       const double rho = step.norm() / last_step.norm();
       if (cos_angle > std::cos(10.0 * M_PI / 180.0) && rho < 0.97) {
-        const Eigen::Matrix<double, 6, 1> rest = std::min(rho / (1.0 - rho), 25.0) * step;
+        const Vector6d rest = std::min(rho / (1.0 - rho), 25.0) * step;
         if (dt < config.t_c_m && dr < config.r_c_rad && rest.head<3>().norm() < config.t_c_m &&
             rest.tail<3>().norm() < config.r_c_rad) {
           result.converged = true;
@@ -585,19 +835,26 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
       break;
     }
   }
-  // Final figures at the converged pose.
+  // Final figures at the converged pose, and the information matrix of its pairs.
   double sum2 = 0.0;
   size_t count = 0;
-  const Eigen::Isometry3f Tf = T.cast<float>();
-  const Eigen::Vector3f origin = side_test ? Eigen::Vector3f(Tf * *source_origin) : Eigen::Vector3f::Zero();
-#pragma omp parallel for reduction(+ : sum2, count) schedule(dynamic, 2048)
-  for (long i = 0; i < n; ++i) {
-    float d2;
-    bool horizontal;
-    if (pair(i, Tf * source[i], origin, d2, horizontal)) {
-      sum2 += d2;
-      ++count;
-    }
+  pairs.final(T, sum2, count);
+  PlaneEquations final_eq = planeEquations(source, pairs, T, skip_horizontal);
+  summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
+  if (!plane && result.converged && config.degeneracy_remap && result.weak_directions > 0) {
+    // Point-to-point moved along weak directions as freely as along the others: undo that. The
+    // correction, taken at the result (T^-1 T_init, the pose parameters of IcpConfig at T, where
+    // the information matrix was evaluated), goes back to the initial guess along the weak
+    // eigenvectors (normalized parameters); the well-constrained part of the result stays.
+    const Spectrum s = spectrum(final_eq, config.six_dof, config.degeneracy_ratio);
+    const Eigen::VectorXd back = s.A.inverse() * reduce(params(T.inverse() * T_init), config.six_dof);
+    Eigen::VectorXd weak_part = Eigen::VectorXd::Zero(back.size());
+    for (int k = 0; k < s.weak; ++k) weak_part += s.vectors.col(k) * s.vectors.col(k).dot(back);
+    T = T * fromParams(expand(s.A * weak_part, config.six_dof));
+    result.remapped = true;
+    pairs.final(T, sum2, count);
+    final_eq = planeEquations(source, pairs, T, skip_horizontal);
+    summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
   }
   result.correspondences = count;
   result.overlap = n > 0 ? static_cast<double>(count) / n : 0.0;

@@ -346,6 +346,10 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     r.correspondences = icp_result.correspondences;
     r.rms_m = icp_result.rms_m;
     r.overlap = icp_result.overlap;
+    r.condition = icp_result.condition;
+    r.degenerate = icp_result.degenerate;
+    r.weak_direction = icp_result.weak_direction;
+    r.remapped = icp_result.remapped;
     r.map_pose = r.converged ? Pose2D::fromIsometry3d(icp_result.T_target_source) : r.guess;
   }
   // Global relaxation: on a copy of the graph, so a scan that cannot be stored changes nothing.

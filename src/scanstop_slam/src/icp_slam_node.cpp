@@ -38,6 +38,11 @@ class IcpSlamNode {
     optional("mode", mode);
     requireMode(pnh, mode);
     config.icp.six_dof = mode == "6dof";
+    std::string method = toString(config.icp.method);  // point_to_point | point_to_plane
+    optional("method", method);
+    config.icp.method = parseIcpMethod(method, pnh.resolveName("method"));
+    optional("degeneracy_ratio", config.icp.degeneracy_ratio);
+    optional("degeneracy_remap", config.icp.degeneracy_remap);
     optional("c_max", config.icp.c_max_m);
     optional("t_c", config.icp.t_c_m);
     double r_c_deg = config.icp.r_c_rad * 180.0 / M_PI;
@@ -241,8 +246,10 @@ class IcpSlamNode {
     res.overlap = r.overlap;
     res.scan_index = r.index;
     if (r.converged)
-      ROS_INFO("icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s", r.index,
-               r.map_pose.toString().c_str(), r.iterations, r.correspondences, r.rms_m * 1000, r.time_s);
+      ROS_INFO("icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s, "
+               "condition %.3g%s%s", r.index, r.map_pose.toString().c_str(), r.iterations, r.correspondences,
+               r.rms_m * 1000, r.time_s, r.condition, r.degenerate ? " (degenerate" : "",
+               r.degenerate ? (r.remapped ? ", guess kept along the weak direction)" : ")") : "");
     else
       ROS_WARN("icp_slam_node: scan %u: %s", r.index, res.message.c_str());
     if (r.refine_rejected)

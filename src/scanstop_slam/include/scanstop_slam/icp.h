@@ -6,9 +6,16 @@
 ///
 /// The target is a VoxelMap: a persistent voxel hash over all map points that grows with every
 /// scan and is never rebuilt.
+///
+/// Beside it (IcpConfig::method) point-to-plane ICP: one Gauss-Newton step per iteration on
+/// sum ((R p + t - m) . n)^2 over the pairs whose map point's voxel is planar (n: VoxelMap's
+/// per-voxel normal). Either method reports the Gauss-Newton Hessian of those point-to-plane
+/// residuals at its result (IcpResult::information) and, where it is nearly singular (a
+/// corridor), keeps the initial guess along its weak directions (IcpConfig::degeneracy_remap).
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -108,7 +115,26 @@ class VoxelMap {
   size_t slot_mask_ = 0;
 };
 
+/// What icp() minimizes per iteration (IcpConfig::method).
+enum class IcpMethod {
+  /// Thesis Algorithm 4: sum |R p + t - m|^2 in closed form (centroids + SVD), every pair.
+  point_to_point,
+  /// One Gauss-Newton step on sum ((R p + t - m) . n)^2 over the pairs with a planar map normal n
+  /// (Surface::planar); pairs without one are left out (no point-to-point fallback: on a plane
+  /// their along-plane terms are what makes point-to-point slide).
+  point_to_plane,
+};
+/// "point_to_point" / "point_to_plane".
+std::string toString(IcpMethod method);
+/// The inverse of toString(); ConfigError naming `name` for anything else.
+IcpMethod parseIcpMethod(const std::string& text, const std::string& name = "method");
+
 /// ICP parameters (thesis optimum as defaults).
+///
+/// Pose parameters of the information matrix and of degeneracy_remap: a perturbation of the pose
+/// in its own frame, T * [R(w), t]: 3dof (t_x, t_y, w_z), 6dof (t_x, t_y, t_z, w_x, w_y, w_z); t
+/// in m along the source frame's axes, w in rad about its origin (so one radian weighs like one
+/// metre: eigenvalues and directions mix the two units as a scene of metres does).
 struct IcpConfig {
   double c_max_m = 0.10;              ///< correspondence distance [m]
   double t_c_m = 0.0005;              ///< convergence: translation change per iteration [m]
@@ -135,6 +161,25 @@ struct IcpConfig {
   /// faces of a thin wall are otherwise one surface to ICP: room_10x8's corridor lies behind a
   /// 10 cm wall, and the first corridor scans slid 4-6 cm onto the room side of it.
   bool same_side = true;
+  /// point_to_point (default: the thesis' ICP, unchanged) or point_to_plane. Point-to-plane does not
+  /// use `accelerate` (Gauss-Newton steps do not creep); its convergence test is the step's
+  /// translation (t_c) and rotation angle (r_c) in the parameters above. Needs planar voxels in the
+  /// map: min_correspondences counts its planar pairs.
+  IcpMethod method = IcpMethod::point_to_point;
+  /// Degeneracy threshold [1] (dimensionless, range [0, 1], default 0.01): a direction of the
+  /// information matrix (eigenvector, in the normalized parameters of IcpResult::eigenvalues) is
+  /// weak when its eigenvalue is below degeneracy_ratio times the largest one;
+  /// IcpResult::degenerate when the smallest is. 0: nothing is ever weak.
+  /// (Measured: the real room pair at c_max 0.5 m 0.12 (condition 8.2), synthetic rooms 0.14-0.35,
+  /// room_10x8 route (slam_bench, 6dof point_to_plane) down to 0.018; a corridor with 1 mm noise 1e-5 - 1e-3.)
+  double degeneracy_ratio = 0.01;
+  /// Keep the initial guess along weak directions (Zhang, Kaess, Singh 2016, solution remapping;
+  /// default true). point_to_plane: each Gauss-Newton step is projected onto the well-constrained
+  /// eigen-subspace of that step's Hessian. point_to_point: after convergence the whole correction
+  /// T_init^-1 T (in the pose parameters above) loses its component along the weak directions of
+  /// the final information matrix, and the final figures are evaluated there. No weak direction:
+  /// results unchanged, bit for bit.
+  bool degeneracy_remap = true;
   // Failure detection.
   int min_correspondences = 200;
   double min_overlap = 0.05;          ///< correspondences / source points
@@ -152,6 +197,30 @@ struct IcpResult {
   size_t correspondences = 0;
   double rms_m = 0.0;           ///< RMS distance of the final correspondences [m]
   double overlap = 0.0;         ///< correspondences / source points
+  /// Gauss-Newton Hessian J^T J of the point-to-plane residuals (R p + t - m) . n of the final pairs
+  /// with a planar map normal, at the result (either method), over the pose parameters of
+  /// IcpConfig (3x3 for 3dof, 6x6 for 6dof) [1/m^2 per residual m^2; unweighted sum over pairs].
+  /// 3dof with ignore_horizontal: without the horizontal pairs, as the solve. Empty if no pair.
+  Eigen::MatrixXd information;
+  size_t information_pairs = 0;    ///< pairs in it (planar map normal)
+  /// Eigenvalues (ascending) of the information matrix in normalized pose parameters: translation
+  /// [m], and rotation about the centroid c of those pairs' source points times their RMS distance
+  /// L from c [m] (3dof: horizontal distance); i.e. A^T information A with t = t' + c x w, w = u / L.
+  /// Unit-free that way: a 15 cm object and a 30 m corridor, a source origin at the points or far
+  /// from them (where a rotation is mostly a translation), compare alike. [m^2 per m^2 residual]
+  Eigen::VectorXd eigenvalues;
+  /// Largest / smallest of those eigenvalues [1] (inf when the smallest is <= 0; NaN without information).
+  double condition = std::numeric_limits<double>::quiet_NaN();
+  /// The eigenvector of the smallest eigenvalue mapped back to the pose parameters of IcpConfig
+  /// (3dof: x, y, yaw; 6dof: x, y, z, roll-, pitch-, yaw-axis rotation), unit length, sign: its
+  /// largest component positive; empty without information. A corridor along x: ~(1, 0, 0).
+  Eigen::VectorXd weak_direction;
+  /// smallest / largest eigenvalue < IcpConfig::degeneracy_ratio (false without information).
+  bool degenerate = false;
+  int weak_directions = 0;         ///< eigenvalues below degeneracy_ratio times the largest
+  /// degeneracy_remap changed the result (point_to_point: the correction was projected;
+  /// point_to_plane: some step had a weak direction).
+  bool remapped = false;
 };
 
 /// Registers source points (in their own frame) to the map, starting at T_init (source -> map).

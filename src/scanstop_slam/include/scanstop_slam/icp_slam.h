@@ -16,6 +16,7 @@
 /// is rebuilt from all scans at their corrected poses (read back from the map directory, or from
 /// the kept downsampled points when there is none).
 
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -150,6 +151,15 @@ struct Registration {
   double relax_max_moved_rad = 0.0;
   double relax_time_s = 0.0;  ///< pairwise registrations + solve + applying [s] (part of time_s)
   std::string relax_problem;  ///< the relaxation's trouble (solver failure, poses.csv not rewritten), or ""
+  /// The information matrix of the final stage (the refinement's when it stands, else the thesis
+  /// stage's; IcpResult): condition [1] (NaN: no planar pair, also for the first scan), degenerate
+  /// (smallest / largest eigenvalue < IcpConfig::degeneracy_ratio), the weak direction (x, y, yaw
+  /// for 3dof; x, y, z, rx, ry, rz for 6dof; empty without information) and whether remapping
+  /// kept the guess along it.
+  double condition = std::numeric_limits<double>::quiet_NaN();
+  bool degenerate = false;
+  Eigen::VectorXd weak_direction;
+  bool remapped = false;
 };
 
 /// A scan's current pose in the map.
