@@ -29,25 +29,77 @@ Explorer::Explorer(const ExplorerConfig& config) : config_(config), floor_(confi
 
 bool Explorer::addScan(uint32_t index, const Pose2D& T_map_base, const std::vector<Eigen::Vector3f>& points_map) {
   if (scans_.count(index)) return false;
-  scans_[index] = T_map_base;
+  Scan scan;
+  scan.pose = T_map_base;
   const Eigen::Vector2f center(static_cast<float>(T_map_base.x), static_cast<float>(T_map_base.y));
   const float r2 = static_cast<float>(config_.self_filter_radius_m * config_.self_filter_radius_m);
-  std::vector<Eigen::Vector3f> kept;
-  kept.reserve(points_map.size());
-  for (const Eigen::Vector3f& p : points_map)
-    if ((p.head<2>() - center).squaredNorm() >= r2) kept.push_back(p);
-  floor_.addPoints(kept);
-  floor_.addKnownFree(Eigen::Vector2d(T_map_base.x, T_map_base.y), config_.known_free_radius_m);
+  // Only the floor and obstacle layers matter to the grid (FloorMap::addPoints); the ceiling and
+  // walls above the robot are not kept.
+  const float lo_z = static_cast<float>(-0.5 * config_.floor.floor_layer_m);
+  const float hi_z = static_cast<float>(0.5 * config_.floor.floor_layer_m + config_.floor.robot_height_m);
+  const Eigen::Matrix2f R = Eigen::Rotation2Df(static_cast<float>(T_map_base.yaw)).toRotationMatrix();
+  scan.points_base.reserve(points_map.size() / 2);
+  for (const Eigen::Vector3f& p : points_map) {
+    if (!p.allFinite() || p.z() < lo_z || p.z() > hi_z) continue;
+    const Eigen::Vector2f d = p.head<2>() - center;
+    if (d.squaredNorm() < r2) continue;
+    const Eigen::Vector2f b = R.transpose() * d;
+    scan.points_base.emplace_back(b.x(), b.y(), p.z());
+  }
+  scan.points_base.shrink_to_fit();
+  addToFloor(scan);
+  scans_.emplace(index, std::move(scan));
   return true;
 }
 
-size_t Explorer::loadMapDirectory(const MapDirectory& dir, std::vector<std::string>* problems) {
+void Explorer::addToFloor(const Scan& scan) {
+  const Pose2D& T = scan.pose;
+  const Eigen::Matrix2f R = Eigen::Rotation2Df(static_cast<float>(T.yaw)).toRotationMatrix();
+  const Eigen::Vector2f t(static_cast<float>(T.x), static_cast<float>(T.y));
+  std::vector<Eigen::Vector3f> points_map;
+  points_map.reserve(scan.points_base.size());
+  for (const Eigen::Vector3f& b : scan.points_base) {
+    const Eigen::Vector2f m = R * b.head<2>() + t;
+    points_map.emplace_back(m.x(), m.y(), b.z());
+  }
+  floor_.addPoints(points_map);
+  floor_.addKnownFree(Eigen::Vector2d(T.x, T.y), config_.known_free_radius_m);
+}
+
+size_t Explorer::updatePoses(const std::map<uint32_t, Pose2D>& poses, double tol_m, double tol_rad) {
+  size_t moved = 0;
+  for (const auto& p : poses) {
+    const auto it = scans_.find(p.first);
+    if (it == scans_.end()) continue;
+    const Pose2D& a = it->second.pose;
+    const Pose2D& b = p.second;
+    if (!std::isfinite(b.x) || !std::isfinite(b.y) || !std::isfinite(b.yaw)) continue;
+    const double dyaw = std::abs(std::remainder(a.yaw - b.yaw, 2 * M_PI));
+    if (std::hypot(a.x - b.x, a.y - b.y) > tol_m || dyaw > tol_rad) ++moved;
+  }
+  if (moved == 0) return 0;
+  for (const auto& p : poses) {
+    const auto it = scans_.find(p.first);
+    if (it != scans_.end() && std::isfinite(p.second.x) && std::isfinite(p.second.y) && std::isfinite(p.second.yaw))
+      it->second.pose = p.second;
+  }
+  // The evidence is rebuilt in index order, as if every scan had been added at its new pose.
+  floor_ = FloorMap(config_.floor);
+  for (const auto& s : scans_) addToFloor(s.second);
+  return moved;
+}
+
+size_t Explorer::loadMapDirectory(const MapDirectory& dir, std::vector<std::string>* problems, size_t* moved) {
   size_t added = 0;
   if (problems)
     for (const MapProblem& p : dir.problems()) problems->push_back(p.message());
+  std::map<uint32_t, Pose2D> known;
   for (size_t i = 0; i < dir.size(); ++i) {
     const MapScanInfo& info = dir.scans()[i];
-    if (hasScan(info.index)) continue;
+    if (hasScan(info.index)) {
+      known[info.index] = info.map_pose;
+      continue;
+    }
     PointCloud cloud;
     try {
       cloud = dir.loadScanInMap(i);
@@ -57,12 +109,14 @@ size_t Explorer::loadMapDirectory(const MapDirectory& dir, std::vector<std::stri
     }
     added += addScan(info.index, info.map_pose, cloud.points) ? 1 : 0;
   }
+  const size_t n_moved = updatePoses(known);
+  if (moved) *moved = n_moved;
   return added;
 }
 
 std::vector<Eigen::Vector2d> Explorer::scanPositions() const {
   std::vector<Eigen::Vector2d> out;
-  for (const auto& s : scans_) out.emplace_back(s.second.x, s.second.y);
+  for (const auto& s : scans_) out.emplace_back(s.second.pose.x, s.second.pose.y);
   return out;
 }
 

@@ -186,8 +186,12 @@ void ExplorerNode::loadMapDir() {
   }
   try {
     std::vector<std::string> problems;
-    const size_t added = explorer_->loadMapDirectory(MapDirectory(node_config_.map_dir), &problems);
+    size_t moved = 0;
+    const size_t added = explorer_->loadMapDirectory(MapDirectory(node_config_.map_dir), &problems, &moved);
     if (added) ROS_INFO("explorer_node: loaded %zu scans from %s", added, node_config_.map_dir.c_str());
+    // SLAM's relaxation corrected earlier poses (poses.csv): the floor grid was rebuilt at them.
+    if (moved) ROS_INFO("explorer_node: %zu scans moved in %s/poses.csv: floor grid rebuilt at the corrected poses",
+                        moved, node_config_.map_dir.c_str());
     for (const std::string& p : problems) ROS_ERROR("explorer_node: map_dir: %s", p.c_str());
   } catch (const std::exception& e) {
     ROS_ERROR("explorer_node: cannot load map_dir: %s", e.what());

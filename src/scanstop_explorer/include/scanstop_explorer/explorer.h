@@ -3,6 +3,7 @@
 /// the knowledge map) and the blacklist of targets the robot failed to reach.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -51,7 +52,21 @@ class Explorer {
   /// Adds every scan of a map directory that is not in yet. Returns how many were added. A scan
   /// file that cannot be read (missing, truncated, corrupt) is skipped and its problem, naming the
   /// file, appended to `problems` (when given); it is tried again on the next call.
-  size_t loadMapDirectory(const MapDirectory& dir, std::vector<std::string>* problems = nullptr);
+  /// Scans already in take the directory's poses (updatePoses): after SLAM's relaxation moved
+  /// them, the floor grid follows; `moved` (when given) receives how many scans moved.
+  size_t loadMapDirectory(const MapDirectory& dir, std::vector<std::string>* problems = nullptr,
+                          size_t* moved = nullptr);
+
+  /// Corrected poses of scans already added (e.g. after SLAM's global relaxation; issue #17 point
+  /// 3): when any of them moved farther than tol_m [m] or tol_rad [rad] from the pose it was added
+  /// at, every scan takes its new pose and the floor grid is rebuilt from the scans' points (kept in
+  /// base_link, floor and obstacle layers only), so that floor, obstacles and known-free discs lie
+  /// where the corrected map has them. Indices not added are ignored; contacts and the blacklist
+  /// stay where they are (map frame). Returns how many scans moved beyond the tolerance (0: nothing
+  /// changed).
+  size_t updatePoses(const std::map<uint32_t, Pose2D>& poses, double tol_m = 0.005, double tol_rad = 0.1 * M_PI / 180);
+  /// The pose each scan is in the floor grid at.
+  Pose2D scanPose(uint32_t index) const { return scans_.at(index).pose; }
 
   /// One planning step from the robot's map-frame pose; updates the blacklist (a target planned
   /// before that the robot neither reached nor got closer to max_failed_attempts times).
@@ -90,7 +105,14 @@ class Explorer {
   };
   ExplorerConfig config_;
   FloorMap floor_;
-  std::map<uint32_t, Pose2D> scans_;
+  /// One scan as the floor grid holds it: its pose and its floor- and obstacle-layer points in
+  /// base_link (after the self filter), for rebuilding the grid when poses move.
+  struct Scan {
+    Pose2D pose;
+    std::vector<Eigen::Vector3f> points_base;
+  };
+  void addToFloor(const Scan& scan);
+  std::map<uint32_t, Scan> scans_;
   std::vector<std::pair<Eigen::Vector2d, double>> blacklist_;
   std::vector<Eigen::Vector2d> contacts_;
   Attempt last_;
