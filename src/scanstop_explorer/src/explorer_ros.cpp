@@ -51,6 +51,7 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "floor_fill_radius_m", c.floor.floor_fill_radius_m);
   optional(pnh, "speckle_min_points", c.floor.speckle_min_points);
   optional(pnh, "speckle_max_cells", c.floor.speckle_max_cells);
+  optional(pnh, "min_obstacle_scans", c.floor.min_obstacle_scans);
   optional(pnh, "robot_radius_m", c.planner.robot_radius_m);
   optional(pnh, "d_max_m", c.planner.d_max_m);
   optional(pnh, "k_r_m", c.planner.k_r_m);

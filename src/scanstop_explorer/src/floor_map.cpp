@@ -26,6 +26,7 @@ void FloorConfig::validate() const {
   requireInRange("min_obstacle_points", min_obstacle_points, 1, 1000);
   requireInRange("speckle_min_points", speckle_min_points, 1, 1000);
   requireInRange("speckle_max_cells", speckle_max_cells, 1, 100);
+  requireInRange("min_obstacle_scans", min_obstacle_scans, 0, 1000);
   requireInRange("max_extent_m", max_extent_m, 1e-3, 1e4, "m");
   requireInRange("floor_fill_radius_m", floor_fill_radius_m, 0.0, 1.0, "m");
 }
@@ -59,6 +60,7 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
   g.height = static_cast<int>(iy1 - iy0);
   cv::Mat floor = cv::Mat::zeros(g.height, g.width, CV_32S), obstacle = cv::Mat::zeros(g.height, g.width, CV_32S);
   cv::Mat obstacle_max = cv::Mat::zeros(g.height, g.width, CV_32S);
+  cv::Mat obstacle_seen = cv::Mat::zeros(g.height, g.width, CV_32S);
   if (!empty()) {
     const int dx = static_cast<int>(std::lround((geometry_.origin_x - g.origin_x) / res));
     const int dy = static_cast<int>(std::lround((geometry_.origin_y - g.origin_y) / res));
@@ -66,11 +68,13 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
     floor_hits_.copyTo(floor(roi));
     obstacle_hits_.copyTo(obstacle(roi));
     obstacle_max_.copyTo(obstacle_max(roi));
+    obstacle_seen_.copyTo(obstacle_seen(roi));
   }
   geometry_ = g;
   floor_hits_ = floor;
   obstacle_hits_ = obstacle;
   obstacle_max_ = obstacle_max;
+  obstacle_seen_ = obstacle_seen;
 }
 
 size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
@@ -109,6 +113,7 @@ size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
     const int row = obstacle_cells[i].first / geometry_.width, col = obstacle_cells[i].first % geometry_.width;
     const int n = static_cast<int>(j - i);
     if (n >= config_.min_obstacle_points) obstacle_hits_.at<int>(row, col)++;
+    obstacle_seen_.at<int>(row, col)++;
     obstacle_max_.at<int>(row, col) = std::max(obstacle_max_.at<int>(row, col), n);
     i = j;
   }
@@ -125,6 +130,9 @@ cv::Mat FloorMap::states() const {
   cv::Mat s = cv::Mat::zeros(geometry_.height, geometry_.width, CV_8U);
   if (empty()) return s;
   cv::Mat obstacle = obstacle_hits_ > 0;
+  // Sparse evidence (grazing views, undersides, thin parts far away: fewer than
+  // min_obstacle_points per scan) still counts once several scans agree on the cell.
+  if (config_.min_obstacle_scans > 0) obstacle |= obstacle_seen_ >= config_.min_obstacle_scans;
   if (config_.speckle_min_points > config_.min_obstacle_points)
     removeObstacleSpeckle(obstacle, obstacle_max_, config_.speckle_min_points, config_.speckle_max_cells);
   for (int r = 0; r < geometry_.height; ++r) {

@@ -151,6 +151,45 @@ TEST(Door, AWallWithAOneCellHoleStaysClosed) {
   EXPECT_NE(fm.states().at<uint8_t>(fm.geometry().cellOf(2.52, 3.05)), kObstacle);  // the hole is there
 }
 
+// Issue #18 point 2: the edge of an overhanging table top (0.5 m, nothing on the floor below)
+// seen at grazing angles from across the room gets at most one point per cell from each scan,
+// and every scan sees plenty of floor under it. Several scans agreeing make it an obstacle, and
+// the floor below does not outvote it; one stray point per cell from one scan does not.
+TEST(FloorMap, AnOverhangSeenOnlyAtGrazingAnglesIsAnObstacle) {
+  FloorMap fm;  // min_obstacle_points 2, min_obstacle_scans 2
+  ASSERT_EQ(fm.config().min_obstacle_scans, 2);
+  const float edge_y = 2.0f;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<Eigen::Vector3f> scan;
+    // The edge: one point per 5 cm cell along 1.2 m, shifted a little from scan to scan.
+    for (float x = 3.0f + 0.01f * k; x < 4.2f; x += 0.05f) scan.emplace_back(x, edge_y + 0.01f * k, 0.5f);
+    // The floor below and around the edge, densely.
+    for (float x = 2.5f; x < 4.7f; x += 0.02f)
+      for (float y = 1.5f; y < 2.5f; y += 0.02f) scan.emplace_back(x, y, 0.0f);
+    fm.addPoints(scan);
+    if (k == 0) {
+      const cv::Mat s = fm.states();
+      EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(3.61, edge_y)), kFloor) << "one point of one scan is no evidence";
+    }
+  }
+  const cv::Mat s = fm.states();
+  int obstacle = 0, cells = 0;
+  for (double x = 3.05; x < 4.15; x += 0.05, ++cells)
+    obstacle += s.at<uint8_t>(fm.geometry().cellOf(x, edge_y + 0.01)) == kObstacle;
+  EXPECT_GE(obstacle, cells - 2) << "of " << cells << " cells along the edge";
+  EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(3.6, 1.7)), kFloor);  // the floor beside it stays floor
+
+  FloorConfig off;
+  off.min_obstacle_scans = 0;  // the rule before: only one scan's own evidence counts
+  FloorMap old(off);
+  for (int k = 0; k < 3; ++k) {
+    std::vector<Eigen::Vector3f> scan;
+    for (float x = 3.0f + 0.01f * k; x < 4.2f; x += 0.05f) scan.emplace_back(x, edge_y + 0.01f * k, 0.5f);
+    old.addPoints(scan);
+  }
+  EXPECT_NE(old.states().at<uint8_t>(old.geometry().cellOf(3.61, edge_y + 0.01)), kObstacle);
+}
+
 TEST(FloorMap, SpeckleRemovalKeepsAThinLegAndClearsStrayPairs) {
   FloorMap fm;  // speckle_min_points 5, speckle_max_cells 2
   std::vector<Eigen::Vector3f> scan;

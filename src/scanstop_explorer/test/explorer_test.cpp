@@ -74,10 +74,20 @@ TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
 TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
   FloorConfig cfg;  // min_obstacle_points = 2
   cfg.speckle_min_points = 2;  // no speckle removal here (SpeckleRemovalKeepsAThinLegAndClearsStrayPairs)
+  cfg.min_obstacle_scans = 0;  // per-scan evidence only (AnOverhangSeenOnlyAtGrazingAnglesIsAnObstacle: the sparse rule)
   FloorMap fm(cfg);
   for (int scan = 0; scan < 5; ++scan) fm.addPoints({{2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});  // one stray point per scan
   cv::Mat s = fm.states();
   EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kUnknown);
+  // With the sparse rule (default min_obstacle_scans 2): random stray points land in different
+  // cells and stay unknown; one point in the same cell from several scans is an obstacle.
+  FloorConfig sparse;
+  sparse.speckle_min_points = 2;
+  FloorMap fs(sparse);
+  for (int scan = 0; scan < 5; ++scan) fs.addPoints({{1.01f + 0.2f * scan, 1.01f, 0.3f}, {2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});
+  const cv::Mat ss = fs.states();
+  for (int scan = 0; scan < 5; ++scan) EXPECT_EQ(ss.at<uint8_t>(fs.geometry().cellOf(1.01 + 0.2 * scan, 1.01)), kUnknown);
+  EXPECT_EQ(ss.at<uint8_t>(fs.geometry().cellOf(2.01, 2.01)), kObstacle);
   fm.addPoints({{2.01f, 2.01f, 0.3f}, {2.02f, 2.03f, 0.5f}});  // two in one scan
   s = fm.states();
   EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kObstacle);

@@ -22,6 +22,7 @@ enum CellState : uint8_t {
   kUnknown = 0,   ///< no floor and no obstacle point
   kFloor = 1,     ///< floor points only (or known free: the robot stood there)
   kObstacle = 2,  ///< some scan put at least min_obstacle_points points into the robot's height layer
+                  ///< (or min_obstacle_scans scans put one each)
                   ///< (and the cell is not speckle, see FloorConfig::speckle_min_points)
 };
 
@@ -47,6 +48,11 @@ struct FloorConfig {
                                   ///< leg) gives many points per scan or spreads over more cells;
                                   ///< <= min_obstacle_points: off, [1, 1000]
   int speckle_max_cells = 2;      ///< largest component that can be speckle, [1, 100]
+  /// Sparse obstacle evidence (issue #18 point 2): a cell into which this many different scans
+  /// each put at least one obstacle-layer point is an obstacle too, even when no single scan put
+  /// min_obstacle_points there (an overhanging table edge or sofa arm seen at grazing angles, an
+  /// underside facing away). Isolated cells still pass the speckle rule. 0 = off, [0, 1000]
+  int min_obstacle_scans = 2;
   double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
   double floor_fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
                                   ///< (morphological closing of the floor over unknown cells only;
@@ -85,6 +91,7 @@ class FloorMap {
   cv::Mat floor_hits_;     ///< CV_32S
   cv::Mat obstacle_hits_;  ///< CV_32S: scans that made the cell an obstacle
   cv::Mat obstacle_max_;   ///< CV_32S: most obstacle-layer points one scan put into the cell
+  cv::Mat obstacle_seen_;  ///< CV_32S: scans that put at least one obstacle-layer point into the cell
   std::vector<std::pair<Eigen::Vector2d, double>> known_free_;  ///< discs (centre [m], radius [m])
 };
 
