@@ -92,10 +92,71 @@ def documented(name, names):
     return False
 
 
+SELF_TEST_CODE = r'''
+  c.port = ros_params::require<std::string>(pnh, "port");
+  ros_params::optional(pnh, "scanner/height", sc.height_m);
+  ros_params::optional(pnh, pp + "sensor/p_hit", sn.p_hit);
+  optional("relax", config.relax);
+  opt(pnh, "motion/max_forward", m.max_forward_m);
+  optional(ros::NodeHandle(nh, ns), "frame_id", n.frame_id);
+  pnh.param("rate", rate_, 10.0);
+  nh.param("/use_sim_time", clock_, false);  // global: not the node's
+  // ros_params::optional(pnh, "commented_out", x);
+'''
+SELF_TEST_README = """# scanstop_x
+
+## Parameters
+
+| name | type | default | unit | meaning |
+|---|---|---|---|---|
+| `port` | string | required | | |
+| `scanner/height`, `frame_id` | double, string | 0.45, map | m | |
+| `profiles/<name>/sensor/p_hit` | double | 0.97 | | |
+| `relax` | bool | false | | |
+| `motion/max_forward` | double | 5 | m | |
+| `rate` | double | 10 | Hz | |
+
+## Services
+| `not_a_parameter` | | |
+"""
+
+
+def self_test():
+    """The checker finds every call form above and fails on a removed row."""
+    import shutil
+    import subprocess
+    import tempfile
+    tmp = tempfile.mkdtemp()
+    try:
+        pkg = os.path.join(tmp, 'src', 'scanstop_x')
+        os.makedirs(os.path.join(pkg, 'src'))
+        open(os.path.join(pkg, 'src', 'node.cpp'), 'w').write(SELF_TEST_CODE)
+        found = set(code_parameters(pkg))
+        expected = {'port', 'scanner/height', '*sensor/p_hit', 'relax', 'motion/max_forward', 'frame_id', 'rate'}
+        ok = found == expected
+        print('self-test: names found %s' % ('OK' if ok else 'WRONG: %s, expected %s' % (sorted(found), sorted(expected))))
+        readme = os.path.join(pkg, 'README.md')
+        runs = []
+        for removed in (None, '| `relax`', '| `profiles/', '| `scanner/height`'):
+            text = ''.join(l for l in SELF_TEST_README.splitlines(True) if not (removed and l.startswith(removed)))
+            open(readme, 'w').write(text)
+            rc = subprocess.run([sys.executable, os.path.abspath(__file__), '--root', tmp],
+                                stdout=subprocess.DEVNULL).returncode
+            runs.append(rc == (0 if removed is None else 1))
+            print('self-test: README %s -> exit %d (%s)' % ('complete' if removed is None else 'without ' + removed.strip('| '),
+                                                            rc, 'OK' if runs[-1] else 'WRONG'))
+        return 0 if ok and all(runs) else 1
+    finally:
+        shutil.rmtree(tmp)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--root', default='.', help='repository root (default: .)')
+    ap.add_argument('--self-test', action='store_true', help='check the checker on a generated package')
     args = ap.parse_args()
+    if args.self_test:
+        return self_test()
     src = os.path.join(args.root, 'src')
     failures, checked = [], 0
     for pkg in sorted(os.listdir(src)):
