@@ -3,7 +3,7 @@
 # environment the scripts use (ROS_IP=127.0.0.1) and lists every listening TCP socket of the master,
 # roslaunch and the nodes. The master (XML-RPC), roslaunch and every TCPROS server must listen on
 # 127.0.0.1 only. roscpp's XML-RPC slave server (xmlrpcpp) always binds all interfaces, whatever
-# ROS_IP says; it is reported as a known exception (README, "Security"), and any other socket on a
+# ROS_IP says; it is reported as a known exception (docs/reliability.md, "Security: ROS 1 has no authentication"), and any other socket on a
 # non-loopback address fails the check.
 # Usage: bash scripts/check_loopback.sh   (after sourcing a devel space; exit 0 = pass)
 set -uo pipefail

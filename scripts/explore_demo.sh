@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's first command: sets up a fresh Debian 12 machine (Debian packages), builds the
+# The README's first command (README.md, "The two commands"): sets up a fresh Debian 12 machine (Debian packages), builds the
 # workspace, and runs a headless simulated exploration (default: room_10x8, thesis error profile,
 # 400 planes per scan) to completion with launch/sim_explore.launch. Prints the mission's progress
 # and finally the summary and where the map, the mesh, the images and the report are.

@@ -73,6 +73,12 @@ if bash scripts/check_mission_replay.sh "$root/logs/mission_replay" > logs/check
 tail -8 logs/check_mission_replay.log
 junit mission_bag_replay $mr_ok logs/check_mission_replay.log
 
+# Every private parameter a node reads is in its package README's Parameters table (no build needed).
+echo "test: parameter documentation (scripts/check_param_docs.py)"
+if { /usr/bin/python3 scripts/check_param_docs.py --self-test && /usr/bin/python3 scripts/check_param_docs.py; } > logs/check_param_docs.log 2>&1; then pd_ok=1; else pd_ok=0; fi
+tail -3 logs/check_param_docs.log
+junit param_docs $pd_ok logs/check_param_docs.log
+
 echo "test: catkin_make run_tests (log in logs/run_tests.log)"
 catkin_make -DCATKIN_ENABLE_TESTING=ON -j1 run_tests > logs/run_tests.log 2>&1
 run_rc=$?
