@@ -605,10 +605,11 @@ TEST(SimSetup, AMissingWorldFileIsTheFilesFaultNotTheStartPoses) {
 }
 
 TEST(SimSetup, AWorldWithoutFloorIsNamed) {
-  WorldBuilder b(2.5);
-  b.wallX(4.0, -5, 5);
+  TriangleMesh walls;  // two upright walls, nothing at z = 0
+  walls.vertices = {{-5, -5, 0.1f}, {5, -5, 0.1f}, {5, -5, 2}, {-5, 5, 0.1f}, {5, 5, 0.1f}, {5, 5, 2}};
+  walls.faces = {{0, 1, 2}, {3, 4, 5}};
   const std::string path = "/tmp/scanstop_sim_setup_no_floor.stl";
-  writeStlBinary(path, b.mesh());
+  writeStlBinary(path, walls);
   const std::string msg = setupMessage(path, "0,0,0");
   EXPECT_NE(msg.find("the world has no floor"), std::string::npos) << msg;
   EXPECT_EQ(msg.find("start_pose"), std::string::npos) << msg;
