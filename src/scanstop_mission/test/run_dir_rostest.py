@@ -18,7 +18,8 @@ PKG = "scanstop_mission"
 WORLDS = os.path.normpath(os.path.join(rospkg.RosPack().get_path(PKG), "..", "..", "worlds"))
 ROOM = os.path.join(WORLDS, "room_10x8.stl")
 CORRIDOR = os.path.join(WORLDS, "corridor.stl")
-IDENTITY = '_run_identity:={start_pose: "", error_profile: thesis, seed: "1"}'
+# As sim_explore.launch sets it (a map: roscpp's _name:=value mappings take scalars only).
+IDENTITY = '{start_pose: "", error_profile: thesis, seed: "1"}'
 
 
 class RunDir(unittest.TestCase):
@@ -34,8 +35,9 @@ class RunDir(unittest.TestCase):
 
     def start(self, params):
         subprocess.call(["rosparam", "delete", "/mission_node"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        subprocess.check_call(["rosparam", "set", "/mission_node/run_identity", IDENTITY])
         args = ["rosrun", PKG, "mission_node", "__name:=mission_node", "_autostart:=false", "_planes:=50",
-                "_wait_for_service_timeout:=5.0", IDENTITY] + params
+                "_wait_for_service_timeout:=5.0"] + params
         self.proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
 
     def fails_fast(self, params, *fragments):
@@ -82,7 +84,8 @@ class RunDir(unittest.TestCase):
         run = self.room_run()
         self.start(["_run_dir:=" + run, "_world:=room_10x8", "_world_file:=" + ROOM])
         time.sleep(4.0)
-        self.assertIsNone(self.proc.poll(), "mission_node refused its own run:\n%s" % self.proc.communicate()[0])
+        if self.proc.poll() is not None:
+            self.fail("mission_node refused its own run:\n%s" % self.proc.communicate()[0])
 
     def test_a_regular_file_as_run_dir(self):
         path = os.path.join(self.tmp, "a_file")
