@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
     pnh.param("end_launch_on_setup_error", end_launch, false);
     if (end_launch && parentIsRoslaunch()) {
       ROS_FATAL("sim_node: ending the launch: every restart would fail the same way");
+      // roslaunch interrupted while it still starts the other nodes hangs ~20 s in its shutdown
+      // (measured): give it time to finish starting them (this process being alive, no respawn).
+      ::sleep(3);
       ::kill(::getppid(), SIGINT);
     }
     return 1;
