@@ -43,9 +43,11 @@ set +e
 roslaunch -p "$port" --skip-log-check "$root/launch/sim_explore.launch" run_dir:="$run_dir" "$@"
 rc=$?
 set -e
-if [[ ! -f "$run_dir/summary.json" ]]; then
-  echo "explore_demo: the mission wrote no summary (roslaunch exit $rc); see $ROS_LOG_DIR" >&2
-  exit 1
+# roslaunch exits 0 whatever happened: the mission's summary of this launch decides (exit 0 only
+# for DONE; scripts/mission_result.py: 1 another end, 2 the launch ended before the mission did).
+if [[ ! -f "$run_dir/summary.json" || $(stat -c %Y "$run_dir/summary.json") -lt $start ]]; then
+  echo "explore_demo: the mission wrote no summary in this launch (roslaunch exit $rc): it ended before the mission did; see the FATAL line above and $ROS_LOG_DIR" >&2
+  exit 2
 fi
 /usr/bin/python3 - "$run_dir" "$(( $(date +%s) - start ))" <<'PY'
 import json, os, sys

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iterator>
+#include <map>
 #include <sstream>
 
 #include "scanstop_common/error.h"
@@ -21,6 +22,7 @@
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_mission/report.h"
+#include "scanstop_mission/run_directory.h"
 
 namespace scanstop {
 namespace mission {
@@ -37,6 +39,36 @@ std::vector<std::string> listImages(const std::string& run_dir, const std::strin
     closedir(d);
   }
   std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// "corridor" for "/a/b/corridor.stl".
+std::string fileStem(const std::string& path) {
+  std::string name = path.substr(path.find_last_of('/') + 1);
+  const size_t dot = name.rfind('.');
+  return dot == std::string::npos ? name : name.substr(0, dot);
+}
+
+/// ~run_identity (a map of field: value, any scalar type) as text fields.
+std::map<std::string, std::string> readIdentityParam(const ros::NodeHandle& pnh) {
+  std::map<std::string, std::string> out;
+  XmlRpc::XmlRpcValue v;
+  if (!pnh.getParam("run_identity", v)) return out;
+  if (v.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+    throw ConfigError("parameter '" + pnh.resolveName("run_identity") + "' must be a map of field: value");
+  for (auto it = v.begin(); it != v.end(); ++it) {
+    XmlRpc::XmlRpcValue& x = it->second;
+    std::ostringstream text;
+    switch (x.getType()) {
+      case XmlRpc::XmlRpcValue::TypeString: text << static_cast<std::string&>(x); break;
+      case XmlRpc::XmlRpcValue::TypeInt: text << static_cast<int>(x); break;
+      case XmlRpc::XmlRpcValue::TypeDouble: text << static_cast<double>(x); break;
+      case XmlRpc::XmlRpcValue::TypeBoolean: text << (static_cast<bool>(x) ? "true" : "false"); break;
+      default:
+        throw ConfigError("parameter '" + pnh.resolveName("run_identity/" + it->first) + "' must be a scalar");
+    }
+    out[it->first] = text.str();
+  }
   return out;
 }
 
@@ -112,7 +144,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
             "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
-            "robot_radius", "explorer_ns"});
+            "robot_radius", "explorer_ns", "run_identity"});
   if (!unknown.empty()) {
     std::string names;
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
@@ -121,7 +153,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
                       "contact_backoff, contact_offset, max_contacts, leg_check, leg_check_radius, leg_check_margin, leg_check_min_z, "
                       "leg_check_max_z, leg_check_self, leg_check_min_points, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
-                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns");
+                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns, run_identity");
   }
   try {
     config_.validate();
@@ -129,6 +161,33 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     throw ConfigError(std::string(e.what()) + " (in " + pnh.getNamespace() + ")");
   }
   if (map_dir.empty()) throw ConfigError("parameter '" + pnh.resolveName("map_dir") + "' is empty");
+
+  // The world actually simulated is the world file (sim_node loads it): the report names that one.
+  if (!world_file_.empty()) {
+    const std::string used = fileStem(world_file_);
+    if (!config_.world.empty() && config_.world != used)
+      ROS_WARN("mission: parameter '%s' = '%s' but the world file is %s: the report names '%s'",
+               pnh.resolveName("world").c_str(), config_.world.c_str(), world_file_.c_str(), used.c_str());
+    config_.world = used;
+  }
+  // The run directory before anything is written into it: a directory that is not one, or that holds
+  // another run's mission, ends the node here (required in the launch: the launch ends with it).
+  RunIdentity identity;
+  identity.fields = readIdentityParam(pnh);
+  identity.fields["world"] = config_.world;
+  identity.fields["planes"] = std::to_string(config_.planes);
+  if (!world_file_.empty()) {
+    try {
+      identity.fields["world_file_fnv1a64"] = fileFingerprint(world_file_);
+    } catch (const IoError& e) {
+      throw ConfigError("parameter '" + pnh.resolveName("world_file") + "' = '" + world_file_ +
+                        "': the world file: " + e.problem());
+    }
+  }
+  const RunDirectory run_directory(config_.run_dir, identity);
+  ROS_INFO("mission: run directory %s (%s; identity in %s)", run_directory.path().c_str(),
+           run_directory.created() ? "new" : run_directory.resumed() ? "resuming its mission" : "no mission in it yet",
+           run_directory.identityPath().c_str());
 
   robot_ = std::make_unique<RosRobotSystem>(nh_, timeouts, map_dir);
   mission_ = std::make_unique<Mission>(

@@ -22,12 +22,6 @@ namespace scanstop {
 namespace sim {
 namespace {
 
-std::string baseName(const std::string& path) {
-  std::string name = path.substr(path.find_last_of('/') + 1);
-  const size_t dot = name.rfind('.');
-  return dot == std::string::npos ? name : name.substr(0, dot);
-}
-
 nav_msgs::Odometry odometryMsg(const Pose2D& pose, const std::string& frame, const std::string& child,
                                const ros::Time& stamp) {
   nav_msgs::Odometry msg;
@@ -108,12 +102,6 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 
   std::string start_text;
   ros_params::optional(pnh, "start_pose", start_text);
-  Pose2D start;
-  try {
-    start = start_text.empty() ? defaultStartPose(baseName(world_path)) : parsePose2D(start_text);
-  } catch (const std::exception& e) {
-    throw ConfigError("parameter '" + pnh.resolveName("start_pose") + "' = '" + start_text + "': " + e.what());
-  }
 
   ros_params::optional(pnh, "world_frame", world_frame_);
   ros_params::optional(pnh, "map_frame", map_frame_);
@@ -126,9 +114,12 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   nh.param("/use_sim_time", publish_clock_, false);
 
   ROS_INFO("sim_node: loading world %s", world_path.c_str());
-  World world = World::load(world_path, world_options);
+  // The world file first, then the start pose: the error names the right one (issue 22).
+  Pose2D start;
   try {
-    sim_ = std::make_unique<Simulator>(std::move(world), config, start);
+    sim_ = makeSimulator(world_path, world_options, config, start_text, pnh.resolveName("start_pose"), &start);
+  } catch (const IoError& e) {
+    throw ConfigError("parameter '" + pnh.resolveName("world") + "': " + e.what());
   } catch (const std::invalid_argument& e) {
     throw ConfigError(std::string("parameter '") + pnh.resolveName("start_pose") + "': " + e.what());
   }
@@ -143,6 +134,11 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
       ROS_INFO("sim_node: resumed the simulation from %s: robot at %s (world), odometry %s, clock %.1f s",
                state_file_.c_str(), sim_->trueInWorld().toString().c_str(), sim_->odometry().toString().c_str(),
                sim_->clock());
+    } catch (const StateOfAnotherWorld& e) {
+      // Another world's simulation: overwriting it would lose that run's robot pose; the run
+      // directory belongs to something else (issue 22).
+      throw ConfigError("parameter '" + pnh.resolveName("state_file") + "' = '" + state_file_ + "': " + e.what() +
+                        ": the run directory belongs to another run; use a new run_dir or delete this one");
     } catch (const std::exception& e) {
       ROS_ERROR("sim_node: ignoring the state file %s (%s): starting at the start pose", state_file_.c_str(), e.what());
     }

@@ -1,14 +1,19 @@
 #include "scanstop_sim/simulator.h"
 
+#include <errno.h>
 #include <malloc.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 
 #include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
+#include "scanstop_sim/world_builder.h"
 
 namespace scanstop {
 namespace sim {
@@ -69,6 +74,31 @@ std::string checkStartPose(const Pose2D& pose, const World& world, double robot_
     return "pose " + pose.toString() + " puts the robot (radius " + num(robot_radius_m) + " m) into an obstacle of " +
            world.name();
   return "";
+}
+
+std::unique_ptr<Simulator> makeSimulator(const std::string& world_path, const WorldOptions& world_options,
+                                         const SimConfig& config, const std::string& start_text,
+                                         const std::string& start_param, Pose2D* start_out) {
+  // The world first: a missing file is the file's fault, not the (defaulted) start pose's.
+  struct stat st;
+  if (::stat(world_path.c_str(), &st) != 0)
+    throw IoError(world_path, std::string("the world file does not exist (") + std::strerror(errno) + ")");
+  if (!S_ISREG(st.st_mode)) throw IoError(world_path, "the world file is not a regular file");
+  World world = World::load(world_path, world_options);
+  Pose2D start;
+  std::string stem = world_path.substr(world_path.find_last_of('/') + 1);
+  if (stem.rfind('.') != std::string::npos) stem = stem.substr(0, stem.rfind('.'));
+  try {
+    start = start_text.empty() ? defaultStartPose(stem) : parsePose2D(start_text);
+  } catch (const std::exception& e) {
+    throw ConfigError("parameter '" + start_param + "' = '" + start_text + "': " + e.what());
+  }
+  const std::string problem = checkStartPose(start, world, config.robot_radius_m);
+  if (!problem.empty())
+    throw ConfigError("parameter '" + start_param + "' = '" + start_text + "'" +
+                      (start_text.empty() ? " (the world's documented start pose)" : "") + ": " + problem);
+  if (start_out) *start_out = start;
+  return std::make_unique<Simulator>(std::move(world), config, start);
 }
 
 Simulator::Simulator(World world, SimConfig config, const Pose2D& start_in_world)
@@ -160,8 +190,12 @@ void Simulator::restoreState(const std::string& text) {
   for (int i = 0; i < 8; ++i)
     if (!have[i]) throw std::invalid_argument(std::string("field '") + names[i] + "' is missing (truncated file?)");
   if (!ended) throw std::invalid_argument("the 'end' line is missing (truncated file?)");
-  if (world != world_.name())
-    throw std::invalid_argument("the state is of world '" + world + "', this simulation runs '" + world_.name() + "'");
+  const auto stemOf = [](std::string name) {
+    name = name.substr(name.find_last_of('/') + 1);
+    return name.rfind('.') == std::string::npos ? name : name.substr(0, name.rfind('.'));
+  };
+  if (stemOf(world) != stemOf(world_.name()))
+    throw StateOfAnotherWorld("the state is of world '" + world + "', this simulation runs '" + world_.name() + "'");
   for (const Pose2D* p : {&start, &truth}) {
     const std::string problem = checkStartPose(*p, world_, config_.robot_radius_m);
     if (!problem.empty()) throw std::invalid_argument(problem);

@@ -573,3 +573,84 @@ TEST(ConfigChecks, BadValuesNameTheSimNodeParameter) {
 }  // namespace
 }  // namespace sim
 }  // namespace scanstop
+
+namespace scanstop {
+namespace sim {
+namespace {
+
+// Start-up checks name the right cause (issue 22): the world file first, then the start pose.
+std::string setupMessage(const std::string& world, const std::string& start) {
+  try {
+    makeSimulator(world, WorldOptions(), SimConfig(), start, "/sim_node/start_pose");
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(SimSetup, AMissingWorldFileIsTheFilesFaultNotTheStartPoses) {
+  // Before: the defaulted start pose of the unknown name "corridr" was blamed.
+  const std::string missing = "/tmp/scanstop_no_such_dir/corridr.stl";
+  for (const std::string start : {"", "1,1,0"}) {
+    const std::string msg = setupMessage(missing, start);
+    EXPECT_NE(msg.find(missing + ": the world file does not exist"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("start_pose"), std::string::npos) << msg;
+  }
+  try {
+    makeSimulator(missing, WorldOptions(), SimConfig(), "");
+    FAIL() << "a missing world file was accepted";
+  } catch (const IoError& e) {
+    EXPECT_EQ(e.path(), missing);
+  }
+}
+
+TEST(SimSetup, AWorldWithoutFloorIsNamed) {
+  TriangleMesh walls;  // two upright walls, nothing at z = 0
+  walls.vertices = {{-5, -5, 0.1f}, {5, -5, 0.1f}, {5, -5, 2}, {-5, 5, 0.1f}, {5, 5, 0.1f}, {5, 5, 2}};
+  walls.faces = {{0, 1, 2}, {3, 4, 5}};
+  const std::string path = "/tmp/scanstop_sim_setup_no_floor.stl";
+  writeStlBinary(path, walls);
+  const std::string msg = setupMessage(path, "0,0,0");
+  EXPECT_NE(msg.find("the world has no floor"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find("start_pose"), std::string::npos) << msg;
+}
+
+TEST(SimSetup, GarbageAndWalledStartPosesNameTheStartPose) {
+  const std::string room = std::string(SCANSTOP_WORLDS_DIR) + "/room_10x8.stl";
+  const std::string garbage = setupMessage(room, "a,b,c");
+  EXPECT_NE(garbage.find("parameter '/sim_node/start_pose' = 'a,b,c'"), std::string::npos) << garbage;
+  EXPECT_NE(garbage.find("not a number"), std::string::npos) << garbage;
+  const std::string wall = setupMessage(room, "0.0,4.0,0.0");
+  EXPECT_NE(wall.find("parameter '/sim_node/start_pose' = '0.0,4.0,0.0'"), std::string::npos) << wall;
+  EXPECT_NE(wall.find("into an obstacle"), std::string::npos) << wall;
+  const std::string outside = setupMessage(room, "50,0,0");
+  EXPECT_NE(outside.find("outside the world"), std::string::npos) << outside;
+  EXPECT_EQ(setupMessage(room, ""), "accepted");  // the documented start pose
+  Pose2D start;
+  makeSimulator(room, WorldOptions(), SimConfig(), "", "start_pose", &start);
+  EXPECT_EQ(start.toString(), defaultStartPose("room_10x8").toString());
+}
+
+TEST(SimSetup, ANamedWorldWithoutADocumentedStartPoseNamesTheStartPose) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  const std::string path = "/tmp/scanstop_sim_setup_hut.stl";
+  writeStlBinary(path, b.mesh());
+  const std::string msg = setupMessage(path, "");
+  EXPECT_NE(msg.find("no documented start pose for world 'scanstop_sim_setup_hut'"), std::string::npos) << msg;
+  EXPECT_EQ(setupMessage(path, "0,0,0"), "accepted");
+}
+
+TEST(SimSetup, AStateOfAnotherWorldIsTypedSoSimNodeRefusesInsteadOfOverwritingIt) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  Simulator room(World::fromMesh(b.mesh(), "/runs/a/room_10x8.stl"), SimConfig(), Pose2D(0, 0, 0));
+  Simulator corridor(World::fromMesh(b.mesh(), "/runs/b/corridor.stl"), SimConfig(), Pose2D(0, 0, 0));
+  Simulator room_elsewhere(World::fromMesh(b.mesh(), "/other/checkout/room_10x8.stl"), SimConfig(), Pose2D(0, 0, 0));
+  EXPECT_THROW(corridor.restoreState(room.saveState()), StateOfAnotherWorld);
+  EXPECT_NO_THROW(room_elsewhere.restoreState(room.saveState()));  // the same world from another checkout
+}
+
+}  // namespace
+}  // namespace sim
+}  // namespace scanstop

@@ -7,7 +7,9 @@
 /// odometry and ground truth are both expressed relative to the start pose.
 
 #include <cstdint>
+#include <memory>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 #include "scanstop_common/cloud.h"
@@ -45,6 +47,12 @@ std::string checkForward(double distance_m, double max_forward_m);
 /// world's bounding box and not touching an obstacle.
 std::string checkStartPose(const Pose2D& pose_in_world, const World& world, double robot_radius_m);
 
+/// Simulator::restoreState was given the state of another world (by the world file's name).
+class StateOfAnotherWorld : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
 struct ScanOutput {
   PointCloud cloud;               ///< organized: height = planes, width = beams; base_link frame; NaN invalid
   uint32_t raw_points = 0;
@@ -66,6 +74,17 @@ struct MotionOutput {
   /// kClearanceRange (that value: at least as far); 0 at a contact [m].
   double min_clearance_m = 0.0;
 };
+
+/// The simulation's start-up checks, in the order that names the right cause (issue 22): the world
+/// file (missing, not an STL, no floor: IoError naming the file and the problem), then the start
+/// pose (`start_text` "x,y,yaw"; empty: the documented start pose of the world file's stem):
+/// ConfigError naming `start_param` for garbage text, a world without a documented start pose, a
+/// pose outside the world or inside an obstacle. Returns the checked simulator; `start_out` (if
+/// given) receives the start pose.
+std::unique_ptr<class Simulator> makeSimulator(const std::string& world_path, const WorldOptions& world_options,
+                                               const SimConfig& config, const std::string& start_text,
+                                               const std::string& start_param = "start_pose",
+                                               Pose2D* start_out = nullptr);
 
 /// Makes glibc keep the scan-sized buffers (cloud, PointCloud2, serialized message: ~5 MB each for
 /// 400 planes) in the heap instead of mapping and unmapping them for every scan: on this
