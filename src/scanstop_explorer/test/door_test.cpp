@@ -156,8 +156,8 @@ TEST(Door, AWallWithAOneCellHoleStaysClosed) {
 // and every scan sees plenty of floor under it. Several scans agreeing make it an obstacle, and
 // the floor below does not outvote it; one stray point per cell from one scan does not.
 TEST(FloorMap, AnOverhangSeenOnlyAtGrazingAnglesIsAnObstacle) {
-  FloorMap fm;  // min_obstacle_points 2, min_obstacle_scans 2
-  ASSERT_EQ(fm.config().min_obstacle_scans, 2);
+  FloorMap fm;  // min_obstacle_points 2, min_obstacle_scans 3
+  ASSERT_EQ(fm.config().min_obstacle_scans, 3);
   const float edge_y = 2.0f;
   for (int k = 0; k < 3; ++k) {
     std::vector<Eigen::Vector3f> scan;

@@ -79,7 +79,7 @@ TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
   for (int scan = 0; scan < 5; ++scan) fm.addPoints({{2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});  // one stray point per scan
   cv::Mat s = fm.states();
   EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kUnknown);
-  // With the sparse rule (default min_obstacle_scans 2): random stray points land in different
+  // With the sparse rule (default min_obstacle_scans 3): random stray points land in different
   // cells and stay unknown; one point in the same cell from several scans is an obstacle.
   FloorConfig sparse;
   sparse.speckle_min_points = 2;

@@ -52,7 +52,7 @@ struct FloorConfig {
   /// each put at least one obstacle-layer point is an obstacle too, even when no single scan put
   /// min_obstacle_points there (an overhanging table edge or sofa arm seen at grazing angles, an
   /// underside facing away). Isolated cells still pass the speckle rule. 0 = off, [0, 1000]
-  int min_obstacle_scans = 2;
+  int min_obstacle_scans = 3;
   double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
   double floor_fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
                                   ///< (morphological closing of the floor over unknown cells only;
