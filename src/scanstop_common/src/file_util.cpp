@@ -1,6 +1,7 @@
 #include "scanstop_common/file_util.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -56,7 +57,30 @@ void commitTemporaryFile(const std::string& tmp, const std::string& path) {
   syncDirectory(path);
 }
 
+std::string inputFileProblem(const std::string& path) {
+  struct stat st;
+  if (path.empty()) return "empty file name";
+  if (::stat(path.c_str(), &st) != 0)
+    return errno == ENOENT || errno == ENOTDIR ? "no such file" : std::string("cannot open: ") + std::strerror(errno);
+  if (S_ISDIR(st.st_mode)) return "is a directory, not a file";
+  if (!S_ISREG(st.st_mode)) return "not a regular file";
+  if (::access(path.c_str(), R_OK) != 0) return std::string("cannot open: ") + std::strerror(errno);
+  return {};
+}
+
+std::string outputFileProblem(const std::string& path) {
+  if (path.empty()) return "empty file name";
+  const size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  struct stat st;
+  if (::stat(dir.c_str(), &st) != 0) return "the directory " + dir + " does not exist";
+  if (!S_ISDIR(st.st_mode)) return dir + " is not a directory";
+  return {};  // a directory at path itself: the rename says so, naming path (and removes the temporary file)
+}
+
 void writeFileAtomic(const std::string& path, const std::string& data) {
+  const std::string problem = outputFileProblem(path);
+  if (!problem.empty()) throw IoError(path, "cannot write: " + problem);
   const std::string tmp = temporaryPathFor(path);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw IoError(path, std::string("cannot create temporary file: ") + std::strerror(errno));
@@ -86,6 +110,8 @@ void writeFileAtomic(const std::string& path, const std::string& data) {
 }
 
 std::string readFile(const std::string& path) {
+  const std::string problem = inputFileProblem(path);
+  if (!problem.empty()) throw IoError(path, problem);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, errno == ENOENT ? "no such file" : std::string("cannot open: ") + std::strerror(errno));
   std::ostringstream buffer;

@@ -26,6 +26,17 @@ const char* const kHeader =
 constexpr size_t kColumns = 17;
 const char* const kHistoryHeader = "index,revision,map_x,map_y,map_yaw";
 constexpr double kMaxIndex = 9999999.0;  // scan_%04u names sort up to 7 digits
+/// Pose coordinates beyond this are refused when read or appended (issue #22 class 3: one pose 100 km
+/// away made a tool's grid grow to gigabytes). 10 km is far beyond any building the robot maps.
+constexpr double kMaxPoseCoordinateM = 10000.0;
+
+/// Why a pose is refused, or empty.
+std::string poseProblem(const Pose2D& p, const char* what) {
+  if (!p.isFinite()) return std::string(what) + " " + p.toString() + " is not finite";
+  if (std::abs(p.x) > kMaxPoseCoordinateM || std::abs(p.y) > kMaxPoseCoordinateM)
+    return std::string(what) + " " + p.toString() + " is beyond the 10000 m pose limit (|x|, |y| <= 10 km)";
+  return {};
+}
 
 /// Creates the directory and any missing parents (like mkdir -p).
 void makeDirectory(const std::string& path) {
@@ -83,6 +94,11 @@ MapScanInfo parseLine(const std::string& line) {
   info.correspondences = static_cast<uint32_t>(v[14]);
   info.rms_m = v[15];
   info.overlap = v[16];
+  for (const auto& pose : {std::make_pair(&info.map_pose, "map pose (columns 4-6)"),
+                           std::make_pair(&info.odom_pose, "odometry pose (columns 7-9)")}) {
+    const std::string problem = poseProblem(*pose.first, pose.second);
+    if (!problem.empty()) fail(problem);
+  }
   const bool control = std::any_of(info.file.begin(), info.file.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; });
   if (info.file.empty() || info.file.find("..") != std::string::npos || info.file[0] == '/' || control)
     fail("scan file name '" + info.file.substr(0, 40) + "' must be a relative path inside the map directory");
@@ -246,6 +262,10 @@ void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
   if (info.index != next_index_)
     throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": the next index is " +
                                    std::to_string(next_index_) + " (" + std::to_string(scans_.size()) + " scans loaded)");
+  for (const auto& pose : {std::make_pair(&info.map_pose, "map pose"), std::make_pair(&info.odom_pose, "odometry pose")}) {
+    const std::string problem = poseProblem(*pose.first, pose.second);
+    if (!problem.empty()) throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": " + problem);
+  }
   info.file = scanFileName(info.index);
   writeCloud(dir_ + "/" + info.file, removeNonFinite(cloud_base));
   scans_.push_back(info);
@@ -288,6 +308,8 @@ uint32_t MapDirectory::updatePoses(const std::vector<std::pair<uint32_t, Pose2D>
       throw IoError(posesPath(), "cannot update the pose of scan " + std::to_string(index) + ": no such scan");
     if (!pose.isFinite())
       throw IoError(posesPath(), "cannot update scan " + std::to_string(index) + " to the non-finite pose " + pose.toString());
+    if (!poseProblem(pose, "pose").empty())
+      throw IoError(posesPath(), "cannot update scan " + std::to_string(index) + ": " + poseProblem(pose, "pose"));
     if (it->map_pose.x == pose.x && it->map_pose.y == pose.y && it->map_pose.yaw == pose.yaw) continue;
     old_lines << index << ',' << revision << ',' << it->map_pose.x << ',' << it->map_pose.y << ',' << it->map_pose.yaw << '\n';
     it->map_pose = pose;

@@ -232,6 +232,8 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
 }
 
 PcdHeader checkPcdFile(const std::string& path) {
+  const std::string problem = inputFileProblem(path);
+  if (!problem.empty()) throw IoError(path, problem);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, errno == ENOENT ? "no such file" : std::string("cannot open: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);
@@ -347,6 +349,8 @@ PointCloud readPcd(const std::string& path) {
 }
 
 void writePcd(const std::string& path, const PointCloud& cloud) {
+  const std::string problem = outputFileProblem(path);  // PCL would only say "Error during open!"
+  if (!problem.empty()) throw IoError(path, "cannot write: " + problem);
   const std::string tmp = temporaryPathFor(path);
   int result = 0;
   const auto fill = [&cloud](auto& pc) {

@@ -344,11 +344,14 @@ void writeXyz(const std::string& path, const PointCloud& cloud) {
 }
 
 PointCloud readCloud(const std::string& path) {
+  const std::string problem = inputFileProblem(path);  // before the extension: a missing "x" is not "format '.'"
+  if (!problem.empty()) throw IoError(path, problem);
   const std::string ext = fileExtension(path);
   if (ext == "pcd") return readPcd(path);
   if (ext == "ply") return readPlyCloud(path);
   if (ext == "xyz" || ext == "txt") return readXyz(path);
-  throw IoError(path, "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
+  throw IoError(path, ext.empty() ? std::string("no file extension: unknown point-cloud format (expected .pcd, .ply or .xyz)")
+                                  : "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
 }
 
 void writeCloud(const std::string& path, const PointCloud& cloud) {
@@ -358,10 +361,13 @@ void writeCloud(const std::string& path, const PointCloud& cloud) {
   if (ext == "pcd") return writePcd(path, cloud);
   if (ext == "ply") return writePlyCloud(path, cloud, true);
   if (ext == "xyz" || ext == "txt") return writeXyz(path, cloud);
-  throw IoError(path, "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
+  throw IoError(path, ext.empty() ? std::string("no file extension: unknown point-cloud format (expected .pcd, .ply or .xyz)")
+                                  : "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
 }
 
 TriangleMesh readMesh(const std::string& path) {
+  const std::string problem = inputFileProblem(path);
+  if (!problem.empty()) throw IoError(path, problem);
   const std::string ext = fileExtension(path);
   if (ext == "stl") return readStl(path);
   if (ext == "ply") return readPly(path);

@@ -15,11 +15,20 @@ namespace {
 
 constexpr size_t kHeaderBytes = 84;
 constexpr size_t kTriangleBytes = 50;
+/// Vertices farther from the origin than this (on any axis) are refused (issue #22 class 3: one vertex
+/// at 1e30 m made a world's grid overflow). 100 km: far beyond any world or building mesh.
+constexpr float kMaxVertexCoordinateM = 1e5f;
 
 void addTriangle(TriangleMesh& mesh, const Eigen::Vector3f v[3], size_t index, const std::string& name) {
   for (int k = 0; k < 3; ++k) {
     if (!v[k].allFinite())
       throw IoError(name, "triangle " + std::to_string(index) + " has a non-finite (NaN or infinite) coordinate");
+    if (v[k].cwiseAbs().maxCoeff() > kMaxVertexCoordinateM) {
+      std::ostringstream where;
+      where << "triangle " << index << " vertex " << k + 1 << " (" << v[k].x() << ", " << v[k].y() << ", " << v[k].z()
+            << ") lies beyond the 100000 m coordinate limit";
+      throw IoError(name, where.str());
+    }
   }
   const int base = static_cast<int>(mesh.vertices.size());
   for (int k = 0; k < 3; ++k) mesh.vertices.push_back(v[k]);

@@ -124,7 +124,7 @@ TEST(CloudIo, MalformedInputsNameFileAndProblem) {
   const std::string pcd = dir.write("bad.pcd", "this is not a pcd file\n");
   expectIoError([&] { readCloud(pcd); }, pcd, "not a valid PCD file");
   expectIoError([&] { readCloud("/nonexistent/a.pcd"); }, "/nonexistent/a.pcd", "no such file");
-  expectIoError([&] { readCloud(dir.file("a.obj")); }, dir.file("a.obj"), "unknown point-cloud format");
+  expectIoError([&] { readCloud(dir.write("a.obj", "o\n")); }, dir.file("a.obj"), "unknown point-cloud format");
   PointCloud broken;
   broken.points.resize(3);
   broken.width = 2;
@@ -363,6 +363,24 @@ TEST(CloudIoRealData, PclTestClouds) {
   const TriangleMesh cube = readPly(sharedDataPath("clouds/cube.ply"));  // binary little endian
   EXPECT_EQ(cube.vertices.size(), 24u);
   EXPECT_EQ(cube.faces.size(), 12u);
+}
+
+// Issue #22 class 6: messages that name the thing. A directory given as an input file said "empty
+// file", a missing path without extension "unknown point-cloud format '.'", an output in a missing
+// directory PCL's "Error during open!" without a path.
+TEST(CloudIo, DirectoriesMissingInputsAndMissingOutputDirectoriesAreNamed) {
+  TempDir dir;
+  ASSERT_EQ(::mkdir(dir.file("scan.pcd").c_str(), 0755), 0);
+  expectIoError([&] { readCloud(dir.file("scan.pcd")); }, dir.file("scan.pcd"), "is a directory, not a file");
+  EXPECT_EQ(pcdFileProblem(dir.file("scan.pcd")), "is a directory, not a file");
+  expectIoError([&] { readCloud(dir.file("")); }, dir.file(""), "is a directory, not a file");
+  expectIoError([&] { readCloud(dir.file("cloud")); }, dir.file("cloud"), "no such file");
+  expectIoError([&] { readFile(dir.file("scan.pcd")); }, dir.file("scan.pcd"), "is a directory, not a file");
+  PointCloud cloud;
+  cloud.push_back({1, 2, 3});
+  for (const char* name : {"missing/out.pcd", "missing/out.ply", "missing/out.xyz"})
+    expectIoError([&] { writeCloud(dir.file(name), cloud); }, dir.file(name),
+                  "cannot write: the directory " + dir.file("missing") + " does not exist");
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/file_util.h"
+#include "scanstop_common/map_check.h"
 #include "scanstop_common/map_dir.h"
 #include "test_util.h"
 
@@ -390,6 +391,88 @@ TEST(MapDirectory, TruncatedScanFileIsReportedByName) {
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find(scan), std::string::npos) << e.what();
   }
+}
+
+
+// Issue #22 class 3: a pose 100 km away grew plan_step to 6 GB. Poses are bounds-checked when read
+// (the line is refused, by number) and when appended.
+TEST(MapDirectory, PosesBeyondTenKilometresAreRefusedByLine) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  std::string text = readFile(dir + "/poses.csv");
+  const size_t at = text.find("\n2,scans/scan_0002.pcd,80,2,");
+  ASSERT_NE(at, std::string::npos) << text;
+  text.replace(at, std::string("\n2,scans/scan_0002.pcd,80,2,").size(), "\n2,scans/scan_0002.pcd,80,100000,");
+  writeFileAtomic(dir + "/poses.csv", text);
+  MapDirectory map(dir);
+  expectOneProblem(map, dir + "/poses.csv", "line 4: map pose (columns 4-6) (x=100000 m");
+  EXPECT_NE(map.problems()[0].problem.find("is beyond the 10000 m pose limit"), std::string::npos)
+      << map.problems()[0].message();
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1}));
+  PointCloud cloud;
+  cloud.push_back({1, 1, 0});
+  expectIoError([&] { map.append(info(3, Pose2D(0, -20000, 0)), cloud); }, map.posesPath(),
+                "cannot append scan 3: map pose (x=0 m, y=-20000 m, yaw=0 rad) is beyond the 10000 m pose limit");
+  EXPECT_EQ(std::ifstream(dir + "/scans/scan_0003.pcd").good(), false) << "nothing written";
+}
+
+std::vector<std::string> warningsOf(const std::string& dir, bool skip_bad, size_t* scans = nullptr) {
+  std::vector<std::string> warnings;
+  const MapDirectory map = openMapForTool(dir, skip_bad, [&](const std::string& w) { warnings.push_back(w); });
+  if (scans) *scans = map.size();
+  return warnings;
+}
+
+// Issue #22 class 2: plan_step and icp_replay went on without a missing scan and exited 0.
+TEST(OpenMapForTool, AMissingScanFileIsAnErrorNamingItUnlessSkipBad) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  ASSERT_EQ(std::remove((dir + "/scans/scan_0001.pcd").c_str()), 0);
+  try {
+    openMapForTool(dir, false, nullptr);
+    ADD_FAILURE() << "a map with a missing scan file was loaded";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              dir + "/scans/scan_0001.pcd: no such file (1 problem in the map; --skip-bad loads the rest)");
+  }
+  size_t scans = 0;
+  const std::vector<std::string> warnings = warningsOf(dir, true, &scans);
+  EXPECT_EQ(scans, 2u);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], "skipped: " + dir + "/scans/scan_0001.pcd: no such file; scan 1 skipped");
+  TempDir healthy;
+  EXPECT_TRUE(warningsOf(makeMap(healthy, 2), false).empty()) << "a healthy map loads without a word";
+}
+
+TEST(OpenMapForTool, ANaNPoseIsAnErrorNamingTheLine) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  std::string text = readFile(dir + "/poses.csv");
+  const size_t at = text.find("\n1,scans/scan_0001.pcd,40,1,");
+  ASSERT_NE(at, std::string::npos) << text;
+  text.replace(at, std::string("\n1,scans/scan_0001.pcd,40,1,").size(), "\n1,scans/scan_0001.pcd,40,nan,");
+  writeFileAtomic(dir + "/poses.csv", text);
+  expectIoError([&] { openMapForTool(dir, false, nullptr); }, dir + "/poses.csv: line 3: column 4 ('nan') is not a finite number",
+                "--skip-bad loads the rest");
+  size_t scans = 0;
+  const std::vector<std::string> warnings = warningsOf(dir, true, &scans);
+  EXPECT_EQ(scans, 2u);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("line 3: column 4 ('nan') is not a finite number; line skipped"), std::string::npos);
+}
+
+TEST(OpenMapForTool, CreatesNothingAndNamesAMissingOrForeignDirectory) {
+  TempDir tmp;
+  // `icp_replay --help` created --help/scans before: a tool never creates the map it reads.
+  expectIoError([&] { openMapForTool(tmp.file("--help"), false, nullptr); }, tmp.file("--help"), "no such map directory");
+  struct stat st;
+  EXPECT_NE(::stat(tmp.file("--help").c_str(), &st), 0);
+  ASSERT_EQ(::mkdir(tmp.file("plain").c_str(), 0755), 0);
+  expectIoError([&] { openMapForTool(tmp.file("plain"), false, nullptr); }, tmp.file("plain/poses.csv"),
+                "does not exist: not a map directory");
+  EXPECT_NE(::stat(tmp.file("plain/scans").c_str(), &st), 0);
+  tmp.write("file.txt", "x");
+  expectIoError([&] { openMapForTool(tmp.file("file.txt"), false, nullptr); }, tmp.file("file.txt"), "not a directory");
 }
 
 }  // namespace

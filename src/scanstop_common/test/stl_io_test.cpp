@@ -111,6 +111,30 @@ TEST(Stl, NaNCoordinates) {
   expectIoError([&] { readStl(q); }, q, "non-finite");
 }
 
+// Issue #22 class 3: one vertex at 1e30 m ended floor_coverage in an OpenCV assertion.
+TEST(Stl, AbsurdCoordinatesAreRefusedByTriangleAndVertex) {
+  TempDir dir;
+  TriangleMesh mesh = tetrahedron();
+  mesh.vertices[3] = Eigen::Vector3f(0, 1e30f, 0);
+  writeStlBinary(dir.file("far.stl"), mesh);
+  expectIoError([&] { readStl(dir.file("far.stl")); }, dir.file("far.stl"),
+                "triangle 1 vertex 3 (0, 1e+30, 0) lies beyond the 100000 m coordinate limit");
+  const std::string q = dir.write("far_ascii.stl",
+                                  "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                  "vertex 0 -2e5 0\nendloop\nendfacet\nendsolid x\n");
+  expectIoError([&] { readStl(q); }, q, "triangle 0 vertex 3 (0, -200000, 0) lies beyond the 100000 m coordinate limit");
+  mesh.vertices[3] = Eigen::Vector3f(0, 99999, 0);  // inside the limit: read
+  writeStlBinary(dir.file("near.stl"), mesh);
+  EXPECT_EQ(readStl(dir.file("near.stl")).faces.size(), 4u);
+}
+
+// Issue #22 class 6: a directory read as a file said "empty file".
+TEST(Stl, ADirectoryIsNamedAsADirectory) {
+  TempDir dir;
+  expectIoError([&] { readStl(dir.file("")); }, dir.file(""), "is a directory, not a file");
+  expectIoError([&] { readMesh(dir.file("")); }, dir.file(""), "is a directory, not a file");
+}
+
 TEST(Stl, NotAnStl) {
   TempDir dir;
   const std::string p = dir.write("readme.stl", std::string(200, 'a') + "\nThis is a README, not a mesh.\n");

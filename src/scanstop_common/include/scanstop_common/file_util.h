@@ -17,7 +17,15 @@ std::string temporaryPathFor(const std::string& path);
 /// the rename survives a power loss). Removes tmp and throws IoError naming path on failure.
 void commitTemporaryFile(const std::string& tmp, const std::string& path);
 
-/// Reads a whole file; throws IoError ("no such file", "cannot read") naming the path.
+/// Why path cannot be read as an input file, or empty: "no such file", "is a directory, not a file",
+/// "not a regular file", "cannot open: <errno text>".
+std::string inputFileProblem(const std::string& path);
+
+/// Why a file cannot be written at path, or empty: "the directory <dir> does not exist",
+/// "<dir> is not a directory".
+std::string outputFileProblem(const std::string& path);
+
+/// Reads a whole file; throws IoError (inputFileProblem, "read error") naming the path.
 std::string readFile(const std::string& path);
 
 /// Lower-case extension without the dot ("ply" for "a/b.PLY"); empty if none.

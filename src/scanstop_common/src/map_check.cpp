@@ -1,0 +1,43 @@
+#include "scanstop_common/map_check.h"
+
+#include <sys/stat.h>
+
+#include "scanstop_common/error.h"
+
+namespace scanstop {
+namespace {
+
+/// The loader's "; line skipped" / "; scan N skipped" / "; not loaded": not what a strict tool does.
+std::string withoutSkipNote(const std::string& problem) {
+  const size_t semi = problem.rfind("; ");
+  if (semi == std::string::npos) return problem;
+  const std::string tail = problem.substr(semi + 2);
+  const bool note = (tail.size() >= 7 && tail.compare(tail.size() - 7, 7, "skipped") == 0) || tail == "not loaded" ||
+                    tail == "no scans loaded";
+  return note ? problem.substr(0, semi) : problem;
+}
+
+}  // namespace
+
+MapDirectory openMapForTool(const std::string& dir, bool skip_bad, const std::function<void(const std::string&)>& warn) {
+  struct stat st;
+  if (dir.empty() || ::stat(dir.c_str(), &st) != 0) throw IoError(dir, "no such map directory");
+  if (!S_ISDIR(st.st_mode)) throw IoError(dir, "not a directory (a map directory holds poses.csv and scans/)");
+  std::string root = dir;
+  while (root.size() > 1 && root.back() == '/') root.pop_back();
+  if (::stat((root + "/poses.csv").c_str(), &st) != 0) throw IoError(root + "/poses.csv", "does not exist: not a map directory");
+  MapDirectory map(root);
+  const auto& problems = map.problems();
+  if (!problems.empty() && !skip_bad) {
+    const MapProblem& first = problems.front();
+    throw IoError(first.path, withoutSkipNote(first.problem) + " (" + std::to_string(problems.size()) +
+                                  (problems.size() == 1 ? " problem" : " problems") +
+                                  " in the map; --skip-bad loads the rest)");
+  }
+  for (const MapProblem& p : problems)
+    if (warn) warn("skipped: " + p.message());
+  if (map.size() == 0) throw IoError(map.posesPath(), "the map directory holds no loadable scans");
+  return map;
+}
+
+}  // namespace scanstop
