@@ -1,69 +1,67 @@
 // floor_coverage: ground-truth coverage of a simulated run's map, without ROS.
-//   floor_coverage WORLD.stl MAP_DIR --start x,y,yaw [--radius R] [--tolerance T]
+//   floor_coverage WORLD.stl MAP_DIR --start x,y,yaw [--radius R] [--tolerance T] [--skip-bad]
 // Prints one JSON object: the true reachable floor of the world (robot disc of radius R swept from
 // the start), how much of it the explorer's floor map (built from MAP_DIR like explorer_node does;
 // the map frame is the start pose, as in sim_node) marks floor, and the share. Exit status: 0 ok,
 // 2 bad arguments or unreadable input.
-#include <sys/stat.h>
-
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "scanstop_common/map_dir.h"
+#include "scanstop_common/error.h"
+#include "scanstop_common/map_check.h"
+#include "scanstop_common/options.h"
 #include "scanstop_common/stl_io.h"
 #include "scanstop_explorer/ground_truth.h"
 
 namespace {
 constexpr const char* kUsage =
-    "usage: floor_coverage WORLD.stl MAP_DIR --start x,y,yaw [--radius R] [--tolerance T]\n"
+    "usage: floor_coverage WORLD.stl MAP_DIR --start x,y,yaw [--radius R] [--tolerance T] [--skip-bad]\n"
     "  WORLD.stl  the simulated world (sim_node's ~world)\n"
     "  MAP_DIR    map directory written by icp_slam_node (poses.csv + scans/)\n"
-    "  --start    the robot's start pose in the world [m, m, rad] (= the map frame)\n"
-    "  --radius   robot radius for the reachable floor [m] (default 0.3, explorer.yaml's robot_radius_m)\n"
-    "  --tolerance  map floor this close to a reachable cell observes it [m] (default 0.1: SLAM drift)\n";
+    "  --start    the robot's start pose in the world [m, m, rad] (= the map frame), |x|, |y| <= 10000\n"
+    "  --radius   robot radius for the reachable floor [m], [0.001, 5] (default 0.3, explorer.yaml's robot_radius_m)\n"
+    "  --tolerance  map floor this close to a reachable cell observes it [m], [0, 1] (default 0.1: SLAM drift)\n"
+    "  --skip-bad   use the good scans of a map with bad lines or scan files (each named on stderr);\n"
+    "               default: refuse such a map, naming the first problem (exit 2)\n";
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace scanstop;
-  std::vector<std::string> pos;
-  std::string start_text;
+  std::string world_path, map_path;
+  std::optional<Pose2D> start;
   double radius = 0.3, tolerance = 0.1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--start" && i + 1 < argc) start_text = argv[++i];
-    else if (a == "--radius" && i + 1 < argc) radius = std::atof(argv[++i]);
-    else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
-    else if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (!a.empty() && a[0] == '-') {
-      std::cerr << "floor_coverage: unknown option '" << a << "'\n" << kUsage;
-      return 2;
-    } else {
-      pos.push_back(a);
-    }
-  }
-  if (pos.size() != 2 || start_text.empty()) {
-    std::cerr << kUsage;
-    return 2;
-  }
-  if (!(radius > 0.0 && radius <= 5.0) || !(tolerance >= 0.0 && tolerance <= 1.0)) {
-    std::cerr << "floor_coverage: --radius must be in (0, 5] m and --tolerance in [0, 1] m\n";
-    return 2;
+  bool skip_bad = false;
+  Options opts("floor_coverage", kUsage);
+  opts.positional("WORLD.stl", world_path)
+      .positional("MAP_DIR", map_path)
+      .custom("--start",
+              [&](const std::string& v) {
+                const std::vector<double> p = parseRealListArg("--start", v, 3, -10000.0, 10000.0, "x,y,yaw");
+                start = Pose2D(p[0], p[1], p[2]);
+              })
+      .real("--radius", radius, 1e-3, 5.0)
+      .real("--tolerance", tolerance, 0.0, 1.0)
+      .flag("--skip-bad", skip_bad);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
+  if (!start) {
+    std::cerr << "floor_coverage: --start is required\n" << kUsage;
+    return kExitUsage;
   }
   try {
-    const Pose2D start = parsePose2D(start_text);
-    const TriangleMesh world = readStl(pos[0]);
-    struct stat st;
-    if (::stat(pos[1].c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
-      throw std::invalid_argument("map directory " + pos[1] + " does not exist");
-    const MapDirectory dir(pos[1]);
+    const TriangleMesh world = readStl(world_path);
+    const MapDirectory dir = openMapForTool(map_path, skip_bad, [](const std::string& w) {
+      std::cerr << "floor_coverage: warning: " << w << "\n";
+    });
     std::vector<std::string> problems;
-    const explorer::GroundTruthCoverage c = explorer::groundTruthCoverageOfMap(world, start, dir, radius, tolerance, &problems);
-    for (const std::string& p : problems) std::cerr << "floor_coverage: " << p << "\n";
+    const explorer::GroundTruthCoverage c =
+        explorer::groundTruthCoverageOfMap(world, *start, dir, radius, tolerance, &problems);
+    for (size_t k = dir.problems().size(); k < problems.size(); ++k) {
+      if (!skip_bad) throw IoError(dir.dir(), problems[k] + " (--skip-bad uses the other scans)");
+      std::cerr << "floor_coverage: warning: skipped: " << problems[k] << "\n";
+    }
     std::printf("{\"reachable_m2\": %.2f, \"observed_m2\": %.2f, \"coverage\": %.4f, \"scans\": %zu}\n", c.reachable_m2,
                 c.observed_m2, c.coverage, c.scans);
   } catch (const std::exception& e) {

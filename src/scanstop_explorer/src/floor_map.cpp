@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <vector>
 
@@ -11,6 +12,11 @@
 
 namespace scanstop {
 namespace explorer {
+namespace {
+/// Largest floor grid [cells]: 10 million (250 m x 200 m at 5 cm); the grid and the planner's
+/// images of it take well under 1 GB at this size.
+constexpr double kMaxGridCells = 1e7;
+}  // namespace
 
 cv::Point GridGeometry::cellOf(double x_m, double y_m) const {
   return {static_cast<int>(std::floor((x_m - origin_x) / resolution)),
@@ -50,7 +56,19 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
     new_hi = new_hi.cwiseMax(Eigen::Vector2d(geometry_.origin_x + geometry_.width * res,
                                              geometry_.origin_y + geometry_.height * res));
   }
-  const long ix0 = static_cast<long>(std::floor(new_lo.x() / res)), iy0 = static_cast<long>(std::floor(new_lo.y() / res));
+  // The size in double before any cast (a far-away pose overflowed long/int), capped at kMaxGridCells:
+  // one far pose grew the grid (and the planner's images of it) to gigabytes (issue #22 class 3).
+  const double fx0 = std::floor(new_lo.x() / res), fy0 = std::floor(new_lo.y() / res);
+  const double fw = std::ceil(new_hi.x() / res) + 1 - fx0, fh = std::ceil(new_hi.y() / res) + 1 - fy0;
+  if (!new_lo.allFinite() || !new_hi.allFinite() || !(fw * fh <= kMaxGridCells)) {
+    char what[400];
+    std::snprintf(what, sizeof what,
+                  "the floor grid would span x [%.6g, %.6g] y [%.6g, %.6g] m: %.6g x %.6g cells at %g m, more than the "
+                  "limit of %.0f cells (a pose or point far from the others?)",
+                  new_lo.x(), new_hi.x(), new_lo.y(), new_hi.y(), fw, fh, res, kMaxGridCells);
+    throw std::length_error(what);
+  }
+  const long ix0 = static_cast<long>(fx0), iy0 = static_cast<long>(fy0);
   const long ix1 = static_cast<long>(std::ceil(new_hi.x() / res)) + 1, iy1 = static_cast<long>(std::ceil(new_hi.y() / res)) + 1;
   GridGeometry g;
   g.resolution = res;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,10 +33,19 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
   g.resolution = resolution;
   g.origin_x = std::floor(lo.x() / resolution) * resolution - resolution;
   g.origin_y = std::floor(lo.y() / resolution) * resolution - resolution;
-  g.width = static_cast<int>(std::ceil((hi.x() - g.origin_x) / resolution)) + 2;
-  g.height = static_cast<int>(std::ceil((hi.y() - g.origin_y) / resolution)) + 2;
-  if (static_cast<double>(g.width) * g.height > 1e8)
-    throw std::invalid_argument("groundTruthCoverage: the world is too large for a " + std::to_string(resolution) + " m grid");
+  // Sizes in double before any cast (a vertex at 1e30 m overflowed int), capped at kMaxGridCells:
+  // about 13 bytes per cell in the masks below, so at most ~260 MB (issue #22 class 3).
+  constexpr double kMaxGridCells = 2e7;
+  const double w = std::ceil((hi.x() - g.origin_x) / resolution) + 2, h = std::ceil((hi.y() - g.origin_y) / resolution) + 2;
+  if (!(w > 0 && h > 0 && w * h <= kMaxGridCells)) {
+    std::ostringstream what;
+    what << "groundTruthCoverage: the world's extent x [" << lo.x() << ", " << hi.x() << "] y [" << lo.y() << ", " << hi.y()
+         << "] m needs a grid of " << w << " x " << h << " cells at " << resolution << " m, more than the limit of "
+         << kMaxGridCells << " cells";
+    throw std::invalid_argument(what.str());
+  }
+  g.width = static_cast<int>(w);
+  g.height = static_cast<int>(h);
   out.obstacle = cv::Mat::zeros(g.height, g.width, CV_8U);
   auto px = [&](const Eigen::Vector3f& v) {
     return cv::Point(static_cast<int>(std::floor((v.x() - g.origin_x) / resolution)),

@@ -1,5 +1,5 @@
 // plan_step: one exploration planning step on a saved map directory, without ROS.
-//   plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N]
+//   plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N] [--skip-bad]
 // Writes OUT_DIR/{floor,distance,cost,knowledge,evaluation}.png, path.csv and plan.json; --json
 // also prints the plan as one JSON object on stdout. Exit status: 0 planned (or complete),
 // 1 planning failed, 2 bad arguments or unreadable input.
@@ -8,22 +8,27 @@
 #include <cerrno>
 #include <cstring>
 #include <iostream>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
-#include "scanstop_common/map_dir.h"
+#include "scanstop_common/map_check.h"
+#include "scanstop_common/options.h"
 #include "scanstop_explorer/explorer.h"
 #include "scanstop_explorer/render.h"
 
 namespace {
 constexpr const char* kUsage =
-    "usage: plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N]\n"
+    "usage: plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N] [--skip-bad]\n"
     "  MAP_DIR  map directory written by icp_slam_node (poses.csv + scans/)\n"
     "  OUT_DIR  where the images, path.csv and plan.json go (created if missing)\n"
-    "  --pose   robot pose in the map frame [m, m, rad]; default: the pose of the last scan\n"
+    "  --pose   robot pose in the map frame [m, m, rad], |x|, |y| <= 10000; default: the pose of the last scan\n"
     "  --json   print the plan (path, target, score, complete, coverage) as one JSON object\n"
-    "  --scale  image pixels per grid cell (default 2)\n";
+    "  --scale  image pixels per grid cell, 1-16 (default 2)\n"
+    "  --skip-bad  plan on the good scans of a map with bad lines or scan files (each named on stderr);\n"
+    "              default: refuse such a map, naming the first problem (exit 2)\n";
 
 bool isDirectory(const std::string& p) {
   struct stat st;
@@ -33,39 +38,34 @@ bool isDirectory(const std::string& p) {
 
 int main(int argc, char** argv) {
   using namespace scanstop;
-  std::string map_dir, out_dir, pose_text;
-  bool json = false;
+  std::string map_dir, out_dir;
+  std::optional<Pose2D> pose_arg;
+  bool json = false, skip_bad = false;
   int scale = 2;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--json") json = true;
-    else if (a == "--pose" && i + 1 < argc) pose_text = argv[++i];
-    else if (a == "--scale" && i + 1 < argc) scale = std::atoi(argv[++i]);
-    else if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (!a.empty() && a[0] != '-' && map_dir.empty()) map_dir = a;
-    else if (!a.empty() && a[0] != '-' && out_dir.empty()) out_dir = a;
-    else {
-      std::cerr << "plan_step: unexpected argument '" << a << "'\n" << kUsage;
-      return 2;
-    }
-  }
-  if (map_dir.empty() || out_dir.empty()) {
-    std::cerr << kUsage;
-    return 2;
-  }
-  if (scale < 1 || scale > 16) {
-    std::cerr << "plan_step: --scale must be in [1, 16]\n";
-    return 2;
-  }
+  Options opts("plan_step", kUsage);
+  opts.positional("MAP_DIR", map_dir)
+      .positional("OUT_DIR", out_dir)
+      .custom("--pose",
+              [&](const std::string& v) {
+                const std::vector<double> p = parseRealListArg("--pose", v, 3, -10000.0, 10000.0, "x,y,yaw");
+                pose_arg = Pose2D(p[0], p[1], p[2]);
+              })
+      .flag("--json", json)
+      .integer("--scale", scale, 1, 16)
+      .flag("--skip-bad", skip_bad);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   try {
-    if (!isDirectory(map_dir)) throw IoError(map_dir, "no such map directory");
-    const MapDirectory dir(map_dir);
-    if (dir.size() == 0) throw IoError(dir.posesPath(), "the map directory holds no scans");
+    const MapDirectory dir =
+        openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "plan_step: warning: " << w << "\n"; });
     explorer::Explorer ex;
-    ex.loadMapDirectory(dir);
-    const Pose2D pose = pose_text.empty() ? dir.scans().back().map_pose : parsePose2D(pose_text);
+    std::vector<std::string> problems;
+    ex.loadMapDirectory(dir, &problems);
+    // A scan that passed the header check but did not load: refused like any other bad scan.
+    for (size_t k = dir.problems().size(); k < problems.size(); ++k) {
+      if (!skip_bad) throw IoError(dir.dir(), problems[k] + " (--skip-bad plans without it)");
+      std::cerr << "plan_step: warning: skipped: " << problems[k] << "\n";
+    }
+    const Pose2D pose = pose_arg ? *pose_arg : dir.scans().back().map_pose;
     const explorer::PlanResult r = ex.plan(pose);
     if (!isDirectory(out_dir) && ::mkdir(out_dir.c_str(), 0755) != 0)
       throw IoError(out_dir, std::string("cannot create directory: ") + std::strerror(errno));

@@ -315,6 +315,31 @@ scanstop::TriangleMesh roomAndCorridor() {
   addBox(world, {1.3f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});    // room south, east of the door
   return world;
 }
+
+// Issue #22 class 3: one vertex far away ended floor_coverage in an OpenCV assertion (the world's grid
+// size overflowed int). The size is checked in double first and capped, naming the extent.
+TEST(GroundTruth, AWorldTooLargeForTheGridIsRefusedByExtent) {
+  scanstop::TriangleMesh w;
+  w.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}, {0, 1e30f, 0}};
+  w.faces = {{0, 1, 2}, {3, 4, 5}};
+  GridGeometry mg;
+  mg.resolution = 0.05;
+  mg.width = 10;
+  mg.height = 10;
+  const cv::Mat nothing = cv::Mat::zeros(mg.height, mg.width, CV_8U);
+  for (const float far : {1e30f, 5e4f}) {
+    w.vertices[5] = Eigen::Vector3f(0, far, 0);
+    try {
+      groundTruthCoverage(w, Pose2D(0.5, 0.2, 0), nothing, mg, Pose2D(), 0.1);
+      ADD_FAILURE() << "a world reaching " << far << " m was rasterised";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("the world's extent x [0, 1] y [0, "), std::string::npos) << what;
+      EXPECT_NE(what.find("more than the limit of 2e+07 cells"), std::string::npos) << what;
+    }
+  }
+}
+
 }  // namespace
 
 TEST(GroundTruthCoverage, TheRobotDiscStaysOnTheFloor) {

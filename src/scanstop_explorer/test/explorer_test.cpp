@@ -71,6 +71,31 @@ TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
   EXPECT_NEAR((g0.center(g0.cellOf(0.51, 0.51)) - g1.center(g1.cellOf(0.51, 0.51))).norm(), 0.0, 1e-9);
 }
 
+// Issue #22 class 3: one pose far from the others grew the grid (and plan_step) to gigabytes before
+// OpenCV failed to allocate. The grid refuses to grow beyond its cell limit, naming the extent, and
+// stays as it was.
+TEST(FloorMap, RefusesToGrowBeyondTheCellLimitAndStaysAsItWas) {
+  FloorMap fm;
+  fm.addPoints({{0.51f, 0.51f, 0.0f}});
+  const GridGeometry g0 = fm.geometry();
+  try {
+    fm.addPoints({{400.0f, 400.0f, 0.0f}});  // within max_extent_m (500 m): 64 million cells, 1 GB
+    ADD_FAILURE() << "a 400 m x 400 m grid was allocated";
+  } catch (const std::length_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the floor grid would span x [-0.5, 401] y [-0.5, 401] m"), std::string::npos) << what;
+    EXPECT_NE(what.find("more than the limit of 10000000 cells"), std::string::npos) << what;
+  }
+  EXPECT_EQ(fm.geometry().width, g0.width);
+  EXPECT_EQ(fm.geometry().height, g0.height);
+  Explorer ex;
+  ASSERT_TRUE(ex.addScan(0, Pose2D(0.0, 0.0, 0.0), {{0.5f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}}));
+  const std::vector<Eigen::Vector3f> far_points = {{2000.5f, 2000.0f, 0.0f}, {2001.0f, 2001.0f, 0.0f}};
+  EXPECT_THROW(ex.addScan(1, Pose2D(2000.0, 2000.0, 0.0), far_points), std::length_error) << "a scan 2.8 km from the other";
+  EXPECT_FALSE(ex.hasScan(1));
+  EXPECT_NO_THROW(fm.addPoints({{100.0f, 50.0f, 0.0f}})) << "a 100 m x 50 m grid is fine";
+}
+
 TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
   FloorConfig cfg;  // min_obstacle_points = 2
   cfg.speckle_min_points = 2;  // no speckle removal here (SpeckleRemovalKeepsAThinLegAndClearsStrayPairs)
