@@ -8,34 +8,35 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/options.h"
 #include "scanstop_slam/icp.h"
 
 using namespace scanstop;
 
 namespace {
 
-void usage() {
-  std::cerr << "usage: icp_register TARGET SOURCE [--init x,y,z,yaw] [--mode 3dof|6dof] [--c-max M]\n"
-               "                    [--t-c M] [--r-c-deg D] [--max-iterations N] [--voxel M] [--no-accelerate] [--json]\n"
-               "                    [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--no-remap]\n"
-               "                    [--map-voxel M]\n"
-               "  TARGET, SOURCE: .pcd, .ply or .xyz point clouds (metres)\n"
-               "  --init: initial guess of SOURCE in TARGET's frame (yaw in degrees; default 0,0,0,0)\n"
-               "  --voxel: keep one source point per voxel of this size before matching (default 0 = all)\n"
-               "  --method: default point_to_point (thesis Algorithm 4)\n"
-               "  --map-voxel: voxel size of TARGET's voxel map, i.e. the scale of its normals (default: c_max)\n"
-               "  --degeneracy-ratio: weak direction below this eigenvalue ratio (default 0.01);\n"
-               "  --no-remap: move along weak directions too (default: keep the initial guess there)\n";
-}
+constexpr const char* kUsage =
+    "usage: icp_register TARGET SOURCE [--init x,y,z,yaw] [--mode 3dof|6dof] [--c-max M]\n"
+    "                    [--t-c M] [--r-c-deg D] [--max-iterations N] [--voxel M] [--no-accelerate] [--json]\n"
+    "                    [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--no-remap]\n"
+    "                    [--map-voxel M]\n"
+    "  TARGET, SOURCE: .pcd, .ply or .xyz point clouds (metres)\n"
+    "  --init: initial guess of SOURCE in TARGET's frame (yaw in degrees; default 0,0,0,0; each within +-10000)\n"
+    "  --c-max [0.001, 5] m, --t-c [1e-9, 1] m, --r-c-deg [1e-7, 57.29] deg, --max-iterations [1, 10000]\n"
+    "  --voxel: keep one source point per voxel of this size before matching, [0, 10] m (default 0 = all)\n"
+    "  --method: default point_to_point (thesis Algorithm 4)\n"
+    "  --map-voxel: voxel size of TARGET's voxel map, i.e. the scale of its normals, [0, 10] m (default 0: c_max)\n"
+    "  --degeneracy-ratio: weak direction below this eigenvalue ratio, [0, 1] (default 0.01);\n"
+    "  --no-remap: move along weak directions too (default: keep the initial guess there)\n"
+    "exit status: 0 converged, 3 not converged, 2 bad arguments, 1 unreadable input\n";
 
-Eigen::Isometry3d parseInit(const std::string& s) {
-  double v[4];
-  if (std::sscanf(s.c_str(), "%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3]) != 4)
-    throw ConfigError("--init must be x,y,z,yaw_deg (four comma-separated numbers), not '" + s + "'");
+Eigen::Isometry3d initFrom(const std::vector<double>& v) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::AngleAxisd(v[3] * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
@@ -45,42 +46,37 @@ Eigen::Isometry3d parseInit(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3) {
-    usage();
-    return 2;
-  }
-  const std::string target_path = argv[1], source_path = argv[2];
+  std::string target_path, source_path, mode = "3dof";
   slam::IcpConfig config;
   Eigen::Isometry3d init = Eigen::Isometry3d::Identity();
   double voxel = 0.0;
   double map_voxel = 0.0;  // 0: c_max
   bool json = false;
+  Options opts("icp_register", kUsage);
+  opts.positional("TARGET", target_path)
+      .positional("SOURCE", source_path)
+      .custom("--init", [&](const std::string& v) { init = initFrom(parseRealListArg("--init", v, 4, -1e4, 1e4, "x,y,z,yaw_deg")); })
+      .choice("--mode", mode, {"3dof", "6dof"})
+      .real("--c-max", config.c_max_m, 0.001, 5.0)
+      .real("--t-c", config.t_c_m, 1e-9, 1.0)
+      .real("--r-c-deg", config.r_c_rad, 1e-7, 57.29, M_PI / 180.0)
+      .integer("--max-iterations", config.max_iterations, 1, 10000)
+      .real("--voxel", voxel, 0.0, 10.0)
+      .flag("--json", json)
+      .flag("--no-accelerate", config.accelerate, false)
+      .custom("--method", [&](const std::string& v) { config.method = slam::parseIcpMethod(v, "--method"); })
+      .real("--degeneracy-ratio", config.degeneracy_ratio, 0.0, 1.0)
+      .flag("--no-remap", config.degeneracy_remap, false)
+      .real("--map-voxel", map_voxel, 0.0, 10.0);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
+  config.six_dof = mode == "6dof";
   try {
-    for (int i = 3; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto next = [&]() -> std::string {
-        if (i + 1 >= argc) throw ConfigError(a + " needs a value");
-        return argv[++i];
-      };
-      if (a == "--init") init = parseInit(next());
-      else if (a == "--mode") {
-        const std::string m = next();
-        if (m != "3dof" && m != "6dof") throw ConfigError("--mode must be 3dof or 6dof, not " + m);
-        config.six_dof = m == "6dof";
-      } else if (a == "--c-max") config.c_max_m = std::stod(next());
-      else if (a == "--t-c") config.t_c_m = std::stod(next());
-      else if (a == "--r-c-deg") config.r_c_rad = std::stod(next()) * M_PI / 180.0;
-      else if (a == "--max-iterations") config.max_iterations = std::stoi(next());
-      else if (a == "--voxel") voxel = std::stod(next());
-      else if (a == "--json") json = true;
-      else if (a == "--no-accelerate") config.accelerate = false;
-      else if (a == "--method") config.method = slam::parseIcpMethod(next(), "--method");
-      else if (a == "--degeneracy-ratio") config.degeneracy_ratio = std::stod(next());
-      else if (a == "--no-remap") config.degeneracy_remap = false;
-      else if (a == "--map-voxel") map_voxel = std::stod(next());
-      else throw ConfigError("unknown option " + a);
+    try {
+      config.validate();
+    } catch (const ConfigError& e) {
+      std::cerr << "icp_register: " << e.what() << "\n";
+      return kExitUsage;
     }
-    config.validate();
     const PointCloud target = readCloud(target_path);
     const PointCloud source = readCloud(source_path);
     const auto start = std::chrono::steady_clock::now();
@@ -95,26 +91,27 @@ int main(int argc, char** argv) {
     const Eigen::Quaterniond q(r.T_target_source.linear());
     const Eigen::Matrix3d R = r.T_target_source.linear();
     const double yaw = std::atan2(R(1, 0), R(0, 0));
-    std::string weak, weak_json;  // the weak direction, space- and comma-separated
+    std::string weak;  // the weak direction, space-separated
     for (Eigen::Index k = 0; k < r.weak_direction.size(); ++k) {
       char buf[32];
       std::snprintf(buf, sizeof buf, "%.6f", r.weak_direction(k));
       weak += (k ? " " : "") + std::string(buf);
-      weak_json += (k ? ", " : "") + std::string(buf);
     }
-    // JSON has no inf / NaN: null.
-    char condition_json[32] = "null";
-    if (std::isfinite(r.condition)) std::snprintf(condition_json, sizeof condition_json, "%.6g", r.condition);
+    // JSON has no inf / NaN: null (jsonNumber); the failure text is escaped (jsonString).
     if (json) {
+      const auto n = [](double v, int precision = 12) { return jsonNumber(v, precision); };
+      std::ostringstream weak_json;
+      for (Eigen::Index k = 0; k < r.weak_direction.size(); ++k) weak_json << (k ? ", " : "") << n(r.weak_direction(k), 6);
       std::printf(
-          "{\"translation\": [%.9f, %.9f, %.9f], \"quaternion\": [%.9f, %.9f, %.9f, %.9f], \"yaw\": %.9f, "
-          "\"iterations\": %d, \"correspondences\": %zu, \"rms\": %.9f, \"overlap\": %.6f, \"converged\": %s, "
-          "\"failure\": \"%s\", \"time_s\": %.6f, \"method\": \"%s\", \"condition\": %s, \"weak_direction\": [%s], "
+          "{\"translation\": [%s, %s, %s], \"quaternion\": [%s, %s, %s, %s], \"yaw\": %s, "
+          "\"iterations\": %d, \"correspondences\": %zu, \"rms\": %s, \"overlap\": %s, \"converged\": %s, "
+          "\"failure\": %s, \"time_s\": %s, \"method\": \"%s\", \"condition\": %s, \"weak_direction\": [%s], "
           "\"degenerate\": %s, \"remapped\": %s, \"information_pairs\": %zu}\n",
-          t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w(), yaw, r.iterations, r.correspondences, r.rms_m, r.overlap,
-          r.converged ? "true" : "false", r.failure.c_str(), time_s, slam::toString(config.method).c_str(),
-          condition_json, weak_json.c_str(), r.degenerate ? "true" : "false", r.remapped ? "true" : "false",
-          r.information_pairs);
+          n(t.x()).c_str(), n(t.y()).c_str(), n(t.z()).c_str(), n(q.x()).c_str(), n(q.y()).c_str(), n(q.z()).c_str(),
+          n(q.w()).c_str(), n(yaw).c_str(), r.iterations, r.correspondences, n(r.rms_m).c_str(), n(r.overlap, 6).c_str(),
+          r.converged ? "true" : "false", jsonString(r.failure).c_str(), n(time_s, 6).c_str(),
+          slam::toString(config.method).c_str(), n(r.condition, 6).c_str(), weak_json.str().c_str(),
+          r.degenerate ? "true" : "false", r.remapped ? "true" : "false", r.information_pairs);
     } else {
       std::printf("translation  %.6f %.6f %.6f m\nquaternion   %.6f %.6f %.6f %.6f (x y z w)\nyaw          %.4f deg\n",
                   t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w(), yaw * 180.0 / M_PI);

@@ -15,34 +15,64 @@
 #include <vector>
 
 #include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/map_check.h"
+#include "scanstop_common/options.h"
 #include "scanstop_slam/icp_slam.h"
 
 using namespace scanstop;
 
 namespace {
 
-void usage() {
-  std::cerr << "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof]\n"
-               "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
-               "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
-               "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
-               "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
-               "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n"
-               "                  [--relax] [--relax-neighbours N] [--relax-loop-candidates N] [--relax-loop-min-gap N]\n"
-               "                  [--relax-max-distance M] [--relax-voxel M] [--relax-min-overlap F] [--relax-max-rms M]\n"
-               "                  [--relax-update M] [--relax-update-deg D] [--relax-loss cauchy|huber|none] [--relax-loss-scale S]\n";
-}
+constexpr const char* kUsage =
+    "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof] [--skip-bad]\n"
+    "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
+    "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
+    "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
+    "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
+    "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n"
+    "                  [--relax] [--relax-neighbours N] [--relax-loop-candidates N] [--relax-loop-min-gap N]\n"
+    "                  [--relax-max-distance M] [--relax-voxel M] [--relax-min-overlap F] [--relax-max-rms M]\n"
+    "                  [--relax-update M] [--relax-update-deg D] [--relax-loss cauchy|huber|none] [--relax-loss-scale S]\n"
+    "  --skip-bad: replay the good scans of a map with bad lines or scan files (each named on stderr);\n"
+    "              default: refuse such a map, naming the first problem\n"
+    "  numbers are checked against the ranges of the SLAM configuration (an error names option, value and range)\n"
+    "exit status: 0 replayed, 2 bad arguments, 1 unreadable or bad input\n";
 
-/// True poses by scan index (a scan the mission adopted after a crash may have none).
+/// True poses by scan index (a scan the mission adopted after a crash may have none). Every problem
+/// names the file (yaml-cpp's own messages only give a line and column).
 std::vector<std::optional<Pose2D>> readTruth(const std::string& path) {
   std::vector<std::optional<Pose2D>> out;
-  const YAML::Node root = YAML::LoadFile(path);
-  if (!root["scans"]) throw IoError(path, "has no 'scans' list (not a mission_state.yaml?)");
+  YAML::Node root;
+  const std::string problem = inputFileProblem(path);  // a directory: libstdc++'s "basic_filebuf::underflow"
+  if (!problem.empty()) throw IoError(path, problem);
+  try {
+    root = YAML::Load(readFile(path));
+  } catch (const YAML::Exception& e) {
+    throw IoError(path, std::string("not valid YAML: ") + e.what());
+  }
+  if (!root.IsMap() || !root["scans"] || !root["scans"].IsSequence())
+    throw IoError(path, "has no 'scans' list (not a mission_state.yaml?)");
+  size_t k = 0;
   for (const auto& s : root["scans"]) {
-    const size_t index = s["index"].as<size_t>();
-    if (index >= out.size()) out.resize(index + 1);
-    const auto p = s["true_pose"];
-    if (p && p.size() == 3) out[index] = Pose2D(p[0].as<double>(), p[1].as<double>(), p[2].as<double>());
+    const std::string where = "scans[" + std::to_string(k++) + "]";
+    try {
+      const double index_value = s["index"].as<double>();
+      if (!(index_value >= 0 && index_value <= 9999999 && index_value == std::floor(index_value)))
+        throw IoError(path, where + ": index " + s["index"].as<std::string>() + " is not an integer from 0 to 9999999");
+      const size_t index = static_cast<size_t>(index_value);
+      if (index >= out.size()) out.resize(index + 1);
+      const auto p = s["true_pose"];
+      if (p && p.size() == 3) {
+        const Pose2D pose(p[0].as<double>(), p[1].as<double>(), p[2].as<double>());
+        if (!pose.isFinite() || std::abs(pose.x) > 1e4 || std::abs(pose.y) > 1e4)
+          throw IoError(path, where + " (scan " + std::to_string(index) + "): true_pose " + pose.toString() +
+                                  " is not finite or beyond the 10000 m pose limit");
+        out[index] = pose;
+      }
+    } catch (const YAML::Exception& e) {
+      throw IoError(path, where + ": " + e.what());
+    }
   }
   return out;
 }
@@ -53,62 +83,58 @@ double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAn
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    usage();
-    return 2;
-  }
-  std::string map_dir = argv[1], out_dir, truth_path;
-  bool quiet = false;
+  std::string map_dir, out_dir, truth_path, mode = "3dof";
+  bool quiet = false, skip_bad = false;
   size_t max_scans = 0;
   slam::SlamConfig config;
+  const double deg = M_PI / 180.0;
+  Options opts("icp_replay", kUsage);
+  opts.positional("MAP_DIR", map_dir)
+      .text("--out", out_dir)
+      .text("--truth", truth_path)
+      .choice("--mode", mode, {"3dof", "6dof"})
+      .flag("--skip-bad", skip_bad)
+      .real("--c-max", config.icp.c_max_m, 0.001, 5.0)
+      .real("--coarse-c-max", config.coarse_c_max_m, 0.0, 5.0)
+      .real("--refine-t-c", config.refine_t_c_m, 0.0, 0.01)
+      .real("--refine-r-c-deg", config.refine_r_c_rad, 1e-7, 0.01 / deg, deg)
+      .integer("--refine-max-iterations", config.refine_max_iterations, 1, 10000)
+      .real("--refine-source-voxel", config.refine_source_voxel_m, 0.0, 1.0)
+      .real("--refine-max-correction", config.refine_max_correction_m, 0.0, 10.0)
+      .real("--refine-max-correction-deg", config.refine_max_correction_rad, 0.0, 180.0, deg)
+      .flag("--no-same-side", config.icp.same_side, false)
+      .real("--t-c", config.icp.t_c_m, 1e-9, 1.0)
+      .real("--r-c-deg", config.icp.r_c_rad, 1e-7, 57.29, deg)
+      .integer("--max-iterations", config.icp.max_iterations, 1, 10000)
+      .integer("--max-points-per-voxel", config.max_points_per_voxel, 1, 100000)
+      .integer("--scans", max_scans, size_t{0}, size_t{10000000})
+      .real("--source-voxel", config.source_voxel_m, 0.0, 1.0)
+      .real("--map-spacing", config.map_spacing_m, 0.0, 5.0)
+      .flag("--quiet", quiet)
+      .flag("--no-accelerate", config.icp.accelerate, false)
+      .flag("--relax", config.relax)
+      .integer("--relax-neighbours", config.relax_neighbours, 0, 100)
+      .integer("--relax-loop-candidates", config.relax_loop_candidates, 0, 100)
+      .integer("--relax-loop-min-gap", config.relax_loop_min_gap, 2, 100000)
+      .real("--relax-max-distance", config.relax_max_distance_m, 1e-6, 1000.0)
+      .real("--relax-voxel", config.relax_voxel_m, 0.01, 1.0)
+      .real("--relax-min-overlap", config.relax_min_overlap, 0.0, 1.0)
+      .real("--relax-max-rms", config.relax_max_rms_m, 1e-6, 1.0)
+      .real("--relax-update", config.relax_update_m, 0.0, 10.0)
+      .real("--relax-update-deg", config.relax_update_rad, 0.0, 180.0, deg)
+      .choice("--relax-loss", config.graph.loss, {"cauchy", "huber", "none"})
+      .real("--relax-loss-scale", config.graph.loss_scale, 1e-6, 1e6);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
+  config.icp.six_dof = mode == "6dof";
   try {
-    for (int i = 2; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto next = [&]() -> std::string {
-        if (i + 1 >= argc) throw ConfigError(a + " needs a value");
-        return argv[++i];
-      };
-      if (a == "--out") out_dir = next();
-      else if (a == "--truth") truth_path = next();
-      else if (a == "--mode") {
-        const std::string m = next();
-        if (m != "3dof" && m != "6dof") throw ConfigError("--mode must be 3dof or 6dof, not " + m);
-        config.icp.six_dof = m == "6dof";
-      } else if (a == "--c-max") config.icp.c_max_m = std::stod(next());
-      else if (a == "--coarse-c-max") config.coarse_c_max_m = std::stod(next());
-      else if (a == "--refine-t-c") config.refine_t_c_m = std::stod(next());
-      else if (a == "--refine-r-c-deg") config.refine_r_c_rad = std::stod(next()) * M_PI / 180.0;
-      else if (a == "--refine-max-iterations") config.refine_max_iterations = std::stoi(next());
-      else if (a == "--refine-source-voxel") config.refine_source_voxel_m = std::stod(next());
-      else if (a == "--refine-max-correction") config.refine_max_correction_m = std::stod(next());
-      else if (a == "--refine-max-correction-deg") config.refine_max_correction_rad = std::stod(next()) * M_PI / 180.0;
-      else if (a == "--no-same-side") config.icp.same_side = false;
-      else if (a == "--t-c") config.icp.t_c_m = std::stod(next());
-      else if (a == "--r-c-deg") config.icp.r_c_rad = std::stod(next()) * M_PI / 180.0;
-      else if (a == "--max-iterations") config.icp.max_iterations = std::stoi(next());
-      else if (a == "--max-points-per-voxel") config.max_points_per_voxel = std::stoi(next());
-      else if (a == "--scans") max_scans = std::stoul(next());
-      else if (a == "--source-voxel") config.source_voxel_m = std::stod(next());
-      else if (a == "--map-spacing") config.map_spacing_m = std::stod(next());
-      else if (a == "--quiet") quiet = true;
-      else if (a == "--no-accelerate") config.icp.accelerate = false;
-      else if (a == "--relax") config.relax = true;
-      else if (a == "--relax-neighbours") config.relax_neighbours = std::stoi(next());
-      else if (a == "--relax-loop-candidates") config.relax_loop_candidates = std::stoi(next());
-      else if (a == "--relax-loop-min-gap") config.relax_loop_min_gap = std::stoi(next());
-      else if (a == "--relax-max-distance") config.relax_max_distance_m = std::stod(next());
-      else if (a == "--relax-voxel") config.relax_voxel_m = std::stod(next());
-      else if (a == "--relax-min-overlap") config.relax_min_overlap = std::stod(next());
-      else if (a == "--relax-max-rms") config.relax_max_rms_m = std::stod(next());
-      else if (a == "--relax-update") config.relax_update_m = std::stod(next());
-      else if (a == "--relax-update-deg") config.relax_update_rad = std::stod(next()) * M_PI / 180.0;
-      else if (a == "--relax-loss") config.graph.loss = next();
-      else if (a == "--relax-loss-scale") config.graph.loss_scale = std::stod(next());
-      else throw ConfigError("unknown option " + a);
+    try {
+      config.validate();
+    } catch (const ConfigError& e) {
+      std::cerr << "icp_replay: " << e.what() << "\n";
+      return kExitUsage;
     }
-    config.validate();
-    const MapDirectory in(map_dir);
-    if (in.size() == 0) throw IoError(map_dir, "holds no scans (poses.csv missing or empty)");
+    const MapDirectory in =
+        openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "icp_replay: warning: " << w << "\n"; });
     std::vector<std::optional<Pose2D>> truth;
     if (!truth_path.empty()) truth = readTruth(truth_path);
     slam::IcpSlam slam(config, out_dir);
@@ -118,6 +144,12 @@ int main(int argc, char** argv) {
     size_t relaxations = 0, relax_edges = 0, relax_tried = 0;
     size_t err_n = 0, last_truth = 0;
     const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
+    // The true pose of the scan at position i of the map (by its index: a skipped scan leaves a gap).
+    const auto truthOf = [&](size_t i) -> const std::optional<Pose2D>& {
+      static const std::optional<Pose2D> none;
+      const size_t index = in.scans()[i].index;
+      return index < truth.size() ? truth[index] : none;
+    };
     for (size_t i = 0; i < n; ++i) {
       const MapScanInfo& info = in.scans()[i];
       const slam::Registration r = slam.registerScan(in.loadScan(i), info.odom_pose, info.sensor_origin, info.stamp_s);
@@ -132,10 +164,10 @@ int main(int argc, char** argv) {
         std::printf("scan %3zu: (%7.3f %7.3f %7.2f deg) %s it %3d rms %5.1f mm %5.2f s", i, r.map_pose.x, r.map_pose.y,
                     r.map_pose.yaw * 180.0 / M_PI, r.converged ? "ok    " : "FAILED", r.iterations, r.rms_m * 1000.0,
                     r.time_s);
-        if (i < truth.size() && truth[i])
-          std::printf("  err %5.1f cm %5.2f deg (stored %5.1f cm, odometry %6.1f cm)", posErr(r.map_pose, *truth[i]) * 100,
-                      yawErrDeg(r.map_pose, *truth[i]), posErr(info.map_pose, *truth[i]) * 100,
-                      posErr(info.odom_pose, *truth[i]) * 100);
+        if (truthOf(i))
+          std::printf("  err %5.1f cm %5.2f deg (stored %5.1f cm, odometry %6.1f cm)", posErr(r.map_pose, *truthOf(i)) * 100,
+                      yawErrDeg(r.map_pose, *truthOf(i)), posErr(info.map_pose, *truthOf(i)) * 100,
+                      posErr(info.odom_pose, *truthOf(i)) * 100);
         std::printf("\n");
         if (!r.converged) std::printf("          %s\n", r.failure.c_str());
         if (config.relax)
@@ -148,8 +180,8 @@ int main(int argc, char** argv) {
           std::printf("          refinement moved %.1f cm, %.2f deg: rejected, the thesis stage's result stands\n",
                       r.refine_moved_m * 100, r.refine_moved_rad * 180.0 / M_PI);
       }
-      if (i < truth.size() && truth[i]) {
-        err_sum += posErr(r.map_pose, *truth[i]);
+      if (truthOf(i)) {
+        err_sum += posErr(r.map_pose, *truthOf(i));
         ++err_n;
         last_truth = i;
       }
@@ -158,8 +190,8 @@ int main(int argc, char** argv) {
     if (err_n > 0) {
       const size_t last = last_truth;
       std::printf("; mean error %.1f cm; error of scan %zu %.1f cm %.2f deg (odometry alone %.1f cm)", err_sum / err_n * 100,
-                  last, posErr(poses[last], *truth[last]) * 100, yawErrDeg(poses[last], *truth[last]),
-                  posErr(in.scans()[last].odom_pose, *truth[last]) * 100);
+                  last, posErr(poses[last], *truthOf(last)) * 100, yawErrDeg(poses[last], *truthOf(last)),
+                  posErr(in.scans()[last].odom_pose, *truthOf(last)) * 100);
     }
     std::printf("\n");
     if (config.relax)
@@ -173,8 +205,8 @@ int main(int argc, char** argv) {
         double sum2 = 0.0, max = 0.0, sum2_yaw = 0.0, max_yaw = 0.0;
         size_t m = 0;
         for (size_t i = 0; i < n; ++i) {
-          if (i >= truth.size() || !truth[i]) continue;
-          const double e = posErr(pose(i), *truth[i]), y = yawErrDeg(pose(i), *truth[i]);
+          if (!truthOf(i)) continue;
+          const double e = posErr(pose(i), *truthOf(i)), y = yawErrDeg(pose(i), *truthOf(i));
           sum2 += e * e;
           sum2_yaw += y * y;
           max = std::max(max, e);

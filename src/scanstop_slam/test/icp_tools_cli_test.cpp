@@ -1,0 +1,202 @@
+// The icp_register and icp_replay command-line tools on bad input (issue #22): strict options and
+// --help (class 7), strict map loading with --skip-bad (class 2), messages naming the file (class 6).
+#include <gtest/gtest.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <string>
+
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/map_dir.h"
+
+using namespace scanstop;
+
+namespace {
+
+struct CliRun {
+  int status = -1;
+  std::string out;  ///< stdout and stderr
+};
+
+CliRun run(const std::string& cmd) {
+  CliRun r;
+  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int st = pclose(p);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+struct TempDir {
+  std::string path;
+  TempDir() {
+    char pattern[] = "/tmp/icp_tools_cli_test_XXXXXX";
+    path = mkdtemp(pattern);
+  }
+  ~TempDir() {
+    if (std::system(("rm -rf '" + path + "'").c_str()) != 0) std::perror("rm");
+  }
+  std::string file(const std::string& name) const { return path + "/" + name; }
+};
+
+bool exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+/// The walls, floor and ceiling of a 4 x 3 x 2 m room around the origin, 10 cm apart.
+PointCloud room() {
+  PointCloud c;
+  for (double a = -2.0; a <= 2.0; a += 0.1)
+    for (double b = -1.5; b <= 1.5; b += 0.1) {
+      c.push_back({static_cast<float>(a), static_cast<float>(b), 0.0f});
+      c.push_back({static_cast<float>(a), static_cast<float>(b), 2.0f});
+    }
+  for (double a = -2.0; a <= 2.0; a += 0.1)
+    for (double z = 0.1; z < 2.0; z += 0.1) {
+      c.push_back({static_cast<float>(a), -1.5f, static_cast<float>(z)});
+      c.push_back({static_cast<float>(a), 1.5f, static_cast<float>(z)});
+    }
+  for (double b = -1.5; b <= 1.5; b += 0.1)
+    for (double z = 0.1; z < 2.0; z += 0.1) {
+      c.push_back({-2.0f, static_cast<float>(b), static_cast<float>(z)});
+      c.push_back({2.0f, static_cast<float>(b), static_cast<float>(z)});
+    }
+  return c;
+}
+
+std::string makeMap(const std::string& dir, size_t scans) {
+  MapDirectory map(dir);
+  for (size_t i = 0; i < scans; ++i) {
+    MapScanInfo info;
+    info.index = static_cast<uint32_t>(i);
+    info.stamp_s = 10.0 * i;
+    info.map_pose = info.odom_pose = Pose2D(0.05 * i, 0.0, 0.0);
+    map.append(info, room());
+  }
+  return dir;
+}
+
+const std::string kRegister = ICP_REGISTER_EXE;
+const std::string kReplay = ICP_REPLAY_EXE;
+
+}  // namespace
+
+// Class 7: "--max-iterations 99999999999" answered "stoi"; "--c-max 0.1abc" and "--voxel -1" ran
+// silently; "--init nan,..." was accepted and --json then printed bare nan (invalid JSON).
+TEST(IcpRegisterCli, NumbersAreStrictAndJsonStaysJson) {
+  TempDir tmp;
+  writeCloud(tmp.file("room.pcd"), room());
+  const std::string base = kRegister + " " + tmp.file("room.pcd") + " " + tmp.file("room.pcd");
+  CliRun r = run(base + " --max-iterations 99999999999");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("icp_register: --max-iterations 99999999999: not an integer in [1, 10000]"), std::string::npos) << r.out;
+  r = run(base + " --c-max 0.1abc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--c-max 0.1abc: not a number in [0.001, 5]"), std::string::npos) << r.out;
+  r = run(base + " --voxel -1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--voxel -1: not a number in [0, 10]"), std::string::npos) << r.out;
+  r = run(base + " --init nan,0,0,0 --json");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--init nan,0,0,0: value 1 ('nan') is not a number"), std::string::npos) << r.out;
+  r = run(base + " --frobnicate");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("icp_register: unknown option --frobnicate"), std::string::npos) << r.out;
+  r = run(kRegister + " --help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out.rfind("usage: icp_register", 0), 0u) << r.out;
+  r = run(base + " --init 0.05,0,0,1 --json");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
+  for (const char* bare : {": inf", "-inf", "[inf", " inf,", " inf]", " inf}"}) EXPECT_EQ(r.out.find(bare), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"converged\": true"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"failure\": \"\""), std::string::npos) << r.out;
+}
+
+// Class 6: a directory given as an input file said "empty file"; a missing path without an extension
+// "unknown point-cloud format '.'".
+TEST(IcpRegisterCli, InputsAreNamedWithWhatIsWrong) {
+  TempDir tmp;
+  writeCloud(tmp.file("room.pcd"), room());
+  ASSERT_EQ(::mkdir(tmp.file("dir.pcd").c_str(), 0755), 0);
+  CliRun r = run(kRegister + " " + tmp.file("dir.pcd") + " " + tmp.file("room.pcd"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.file("dir.pcd") + ": is a directory, not a file"), std::string::npos) << r.out;
+  r = run(kRegister + " " + tmp.file("room.pcd") + " " + tmp.file("nothing"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.file("nothing") + ": no such file"), std::string::npos) << r.out;
+}
+
+// Class 7: `icp_replay --help` created a folder named --help/scans; a missing map directory was created.
+TEST(IcpReplayCli, HelpAndAMissingMapCreateNothing) {
+  TempDir tmp;
+  CliRun r = run("cd " + tmp.path + " && " + kReplay + " --help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out.rfind("usage: icp_replay", 0), 0u) << r.out;
+  EXPECT_FALSE(exists(tmp.file("--help")));
+  r = run(kReplay + " " + tmp.file("no_map") + " --quiet");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.file("no_map") + ": no such map directory"), std::string::npos) << r.out;
+  EXPECT_FALSE(exists(tmp.file("no_map")));
+  r = run(kReplay + " " + tmp.file("no_map") + " --max-iterations 99999999999");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--max-iterations 99999999999: not an integer in [1, 10000]"), std::string::npos) << r.out;
+  r = run(kReplay + " " + tmp.file("no_map") + " --relax-loss fancy");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--relax-loss fancy: must be one of cauchy, huber, none"), std::string::npos) << r.out;
+  EXPECT_FALSE(exists(tmp.file("no_map")));
+}
+
+// Class 2: icp_replay on a map with a missing scan file went on with the rest and exited 0.
+TEST(IcpReplayCli, AMissingScanFileIsRefusedByNameUnlessSkipBad) {
+  TempDir tmp;
+  const std::string map = makeMap(tmp.file("map"), 3);
+  ASSERT_EQ(std::remove((map + "/scans/scan_0001.pcd").c_str()), 0);
+  CliRun r = run(kReplay + " " + map + " --quiet");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("icp_replay: " + map + "/scans/scan_0001.pcd: no such file (1 problem in the map; --skip-bad loads the rest)"),
+            std::string::npos)
+      << r.out;
+  r = run(kReplay + " " + map + " --quiet --skip-bad");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("icp_replay: warning: skipped: " + map + "/scans/scan_0001.pcd: no such file; scan 1 skipped"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("2 scans,"), std::string::npos) << r.out;
+}
+
+// Class 6: a garbage ground-truth file gave a yaml-cpp line and column without the file name.
+TEST(IcpReplayCli, ABadTruthFileIsNamed) {
+  TempDir tmp;
+  const std::string map = makeMap(tmp.file("map"), 1);
+  writeFileAtomic(tmp.file("garbage.yaml"), "scans: [ {index: 0, true_pose: [1, 2\n");
+  CliRun r = run(kReplay + " " + map + " --quiet --truth " + tmp.file("garbage.yaml"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("icp_replay: " + tmp.file("garbage.yaml") + ": not valid YAML: yaml-cpp: error at line"),
+            std::string::npos)
+      << r.out;
+  writeFileAtomic(tmp.file("huge.yaml"), "scans:\n  - index: 4000000000\n    true_pose: [0, 0, 0]\n");
+  r = run(kReplay + " " + map + " --quiet --truth " + tmp.file("huge.yaml"));  // resized a vector to 4e9 before
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.file("huge.yaml") + ": scans[0]: index 4000000000 is not an integer from 0 to 9999999"),
+            std::string::npos)
+      << r.out;
+  writeFileAtomic(tmp.file("nan.yaml"), "scans:\n  - index: 0\n    true_pose: [.nan, 0, 0]\n");
+  r = run(kReplay + " " + map + " --quiet --truth " + tmp.file("nan.yaml"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.file("nan.yaml") + ": scans[0] (scan 0): true_pose"), std::string::npos) << r.out;
+  r = run(kReplay + " " + map + " --quiet --truth " + tmp.path);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.path + ": is a directory, not a file"), std::string::npos) << r.out;
+  writeFileAtomic(tmp.file("truth.yaml"), "scans:\n  - index: 0\n    true_pose: [0, 0, 0]\n");
+  r = run(kReplay + " " + map + " --quiet --truth " + tmp.file("truth.yaml"));
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("error, odometry"), std::string::npos) << r.out;
+}
