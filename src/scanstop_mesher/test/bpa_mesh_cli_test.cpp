@@ -5,10 +5,12 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
 #include <string>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/file_util.h"
+#include "scanstop_common/map_dir.h"
 #include "scanstop_common/shared_data.h"
 
 using namespace scanstop;
@@ -90,7 +92,56 @@ TEST(BpaMeshCli, BadArgumentsAndFilesAreNamed) {
   EXPECT_NE(r.out.find("missing.pcd"), std::string::npos) << r.out;
   r = run("'" + in + "' " + tmp.path + "/x.ply --voxel -1");
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.out.find("voxel_m"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("bpa_mesh: --voxel -1: not a number in [0, 10]"), std::string::npos) << r.out;
   r = run("'" + in + "'");
   EXPECT_EQ(r.status, 2);
+}
+
+// Issue #22: strict options and --help (class 7), an output in a missing directory named before any
+// work (class 6; PCL said "Error during open!" without a path for .pcd), a map directory with a
+// missing scan file refused by name unless --skip-bad (class 2).
+TEST(BpaMeshCli, OptionsOutputsAndMapsFailFastByName) {
+  TempDir tmp;
+  const std::string in = sharedDataPath("clouds/bun0.pcd");
+  CliRun r = run("--help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out.rfind("usage: bpa_mesh", 0), 0u) << r.out;
+  r = run("'" + in + "' " + tmp.path + "/x.ply --voxel 0.01abc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--voxel 0.01abc: not a number in [0, 10]"), std::string::npos) << r.out;
+  r = run("'" + in + "' " + tmp.path + "/x.ply --viewpoint 0,nan,0");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--viewpoint 0,nan,0: value 2 ('nan')"), std::string::npos) << r.out;
+  r = run("'" + in + "' " + tmp.path + "/no_dir/x.ply");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.path + "/no_dir/x.ply: cannot write: the directory " + tmp.path + "/no_dir does not exist"),
+            std::string::npos)
+      << r.out;
+  r = run(tmp.path + " " + tmp.path + "/x.ply");  // a directory that is no map
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.path + "/poses.csv: does not exist"), std::string::npos) << r.out;
+
+  const PointCloud bunny = readCloud(in);
+  PointCloud points;
+  for (const auto& p : bunny.points) points.push_back(p);
+  {
+    MapDirectory map(tmp.path + "/map");
+    for (uint32_t i = 0; i < 2; ++i) {
+      MapScanInfo info;
+      info.index = i;
+      info.sensor_origin = Eigen::Vector3d(0.0, 0.0, 0.5);
+      map.append(info, points);
+    }
+  }
+  ASSERT_EQ(std::remove((tmp.path + "/map/scans/scan_0001.pcd").c_str()), 0);
+  r = run(tmp.path + "/map " + tmp.path + "/map.ply --radii 0.007,0.014");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.path + "/map/scans/scan_0001.pcd: no such file"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::ifstream(tmp.path + "/map.ply").good());
+  r = run(tmp.path + "/map " + tmp.path + "/map.ply --radii 0.007,0.014 --skip-bad");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("bpa_mesh: warning: skipped: " + tmp.path + "/map/scans/scan_0001.pcd: no such file"),
+            std::string::npos)
+      << r.out;
+  EXPECT_TRUE(std::ifstream(tmp.path + "/map.ply").good());
 }
