@@ -9,36 +9,33 @@
 #include <vector>
 
 #include "scanstop_common/error.h"
+#include "scanstop_common/options.h"
 #include "scanstop_common/stl_io.h"
 #include "scanstop_sim/world_builder.h"
 
 namespace {
-int usage() {
-  std::cerr << "usage: make_worlds OUT_DIR [--furnished SEED ...]\n"
-               "  writes the project's worlds (or only furnished_<SEED>.stl for each SEED, 0-999999999) into OUT_DIR\n";
-  return 2;
-}
+constexpr const char* kUsage =
+    "usage: make_worlds OUT_DIR [--furnished SEED ...]\n"
+    "  writes the project's worlds (or only furnished_<SEED>.stl for each SEED, 0-999999999) into OUT_DIR\n"
+    "  (OUT_DIR must exist)\n";
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") return usage();
-  std::vector<unsigned> seeds;
+  std::string out_dir;
+  std::vector<std::string> seed_texts;
   bool furnished = false;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--furnished") {
-      furnished = true;
-      continue;
-    }
-    if (!furnished || a.empty() || a.size() > 9 || a.find_first_not_of("0123456789") != std::string::npos) {
-      std::cerr << "make_worlds: '" << a << "' is not a seed (a whole number 0-999999999 after --furnished)\n";
-      return usage();
-    }
-    seeds.push_back(static_cast<unsigned>(std::stoul(a)));
-  }
-  if (furnished && seeds.empty()) {
-    std::cerr << "make_worlds: --furnished needs at least one seed\n";
-    return usage();
+  scanstop::Options opts("make_worlds", kUsage);
+  opts.positional("OUT_DIR", out_dir).flag("--furnished", furnished).rest("SEED", seed_texts);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
+  std::vector<unsigned> seeds;
+  try {
+    if (!seed_texts.empty() && !furnished) throw scanstop::ConfigError("unexpected argument " + seed_texts.front() + " (seeds follow --furnished)");
+    for (const std::string& a : seed_texts)
+      seeds.push_back(static_cast<unsigned>(scanstop::parseIntegerArg("--furnished seed", a, 0, 999999999)));
+    if (furnished && seeds.empty()) throw scanstop::ConfigError("--furnished needs at least one seed");
+  } catch (const scanstop::ConfigError& e) {
+    std::cerr << "make_worlds: " << e.what() << "\n" << kUsage;
+    return scanstop::kExitUsage;
   }
   try {
     std::vector<scanstop::sim::WorldSpec> worlds;
@@ -47,7 +44,7 @@ int main(int argc, char** argv) {
     else
       worlds = scanstop::sim::buildWorlds();
     for (const auto& w : worlds) {
-      const std::string path = std::string(argv[1]) + "/" + w.name + ".stl";
+      const std::string path = out_dir + "/" + w.name + ".stl";
       scanstop::writeStlBinary(path, w.mesh);
       std::printf("%-12s %5.1f x %4.1f m  %6zu triangles  start (%.2f, %.2f, %.2f rad)  %s\n", w.name.c_str(),
                   w.size_m.x(), w.size_m.y(), w.mesh.faces.size(), w.start.x, w.start.y, w.start.yaw, path.c_str());
