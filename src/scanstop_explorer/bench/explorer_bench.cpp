@@ -15,6 +15,7 @@
 
 #include "../test/scenes.h"
 #include "scanstop_common/map_dir.h"
+#include "scanstop_common/options.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/explorer.h"
 
@@ -50,14 +51,9 @@ test::Scene fourRooms() {
 int main(int argc, char** argv) {
   int repeat = 20;
   std::string write_map;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--write-map") && i + 1 < argc) write_map = argv[++i];
-    else {
-      std::fprintf(stderr, "usage: explorer_bench [--repeat N] [--write-map DIR]\n");
-      return 2;
-    }
-  }
+  scanstop::Options opts("explorer_bench", "usage: explorer_bench [--repeat N (1-100000)] [--write-map DIR]\n");
+  opts.integer("--repeat", repeat, 1, 100000).text("--write-map", write_map);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   const test::Scene world = fourRooms();
   const double range = 6.0;
   Explorer ex;
