@@ -13,6 +13,7 @@
 #include "scenes.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/map_dir.h"
+#include "scanstop_common/stl_io.h"
 
 using namespace scanstop;
 using namespace scanstop::explorer;
@@ -181,5 +182,47 @@ TEST(PlanStep, StrictOptionsAndHelp) {
   r = run(base + " --json --scale 1");
   EXPECT_EQ(r.status, 0) << r.out;
   EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
+  EXPECT_EQ(std::system(("rm -rf " + dir).c_str()), 0);
+}
+
+// Issue #22 classes 3, 2 and 7 for floor_coverage: one STL vertex at 1e30 m ended it in an OpenCV
+// assertion; a map with a missing scan was used without a word; --radius 0.3abc was read as 0.3.
+TEST(FloorCoverage, AbsurdWorldsBadMapsAndBadOptionsAreRefusedByName) {
+  const std::string dir = tempDir();
+  const std::string map = makeMap(dir + "/map", {Pose2D(1.0, 1.0, 0.0), Pose2D(1.5, 1.0, 0.0)});
+  TriangleMesh world;
+  world.vertices = {{-1, -1, 0}, {5, -1, 0}, {5, 5, 0}, {-1, -1, 0}, {5, 5, 0}, {-1, 5, 0}};
+  world.faces = {{0, 1, 2}, {3, 4, 5}};
+  writeStlBinary(dir + "/world.stl", world);
+  const std::string exe = std::string(FLOOR_COVERAGE_EXE) + " ";
+  ToolRun r = run(exe + dir + "/world.stl " + map + " --start 1,1,0");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("\"coverage\""), std::string::npos) << r.out;
+  world.vertices[5] = Eigen::Vector3f(-1, 1e30f, 0);
+  writeStlBinary(dir + "/far.stl", world);
+  r = run(exe + dir + "/far.stl " + map + " --start 1,1,0");
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_NE(r.out.find(dir + "/far.stl: triangle 1 vertex 3 (-1, 1e+30, 0) lies beyond the 100000 m coordinate limit"),
+            std::string::npos)
+      << r.out;
+  r = run(exe + dir + "/world.stl " + map + " --start 1,1,0 --radius 0.3abc");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("floor_coverage: --radius 0.3abc: not a number in [0.001, 5]"), std::string::npos) << r.out;
+  r = run(exe + dir + "/world.stl " + map);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--start is required"), std::string::npos) << r.out;
+  r = run(exe + dir + " " + map + " --start 1,1,0");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find(dir + ": is a directory, not a file"), std::string::npos) << r.out;
+  ASSERT_EQ(std::remove((map + "/scans/scan_0001.pcd").c_str()), 0);
+  r = run(exe + dir + "/world.stl " + map + " --start 1,1,0");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find(map + "/scans/scan_0001.pcd: no such file (1 problem in the map; --skip-bad loads the rest)"),
+            std::string::npos)
+      << r.out;
+  r = run(exe + dir + "/world.stl " + map + " --start 1,1,0 --skip-bad");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("floor_coverage: warning: skipped: " + map + "/scans/scan_0001.pcd"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"scans\": 1"), std::string::npos) << r.out;
   EXPECT_EQ(std::system(("rm -rf " + dir).c_str()), 0);
 }
