@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "scanstop_common/config.h"
@@ -357,6 +358,36 @@ void IcpConfig::validate() const {
   requireInRange("degeneracy_ratio", degeneracy_ratio, 0.0, 1.0);
 }
 
+namespace {
+int64_t voxelKey(const Eigen::Vector3f& p, double voxel_m) {
+  const auto enc = [voxel_m](float v) {
+    return static_cast<int64_t>(std::floor(v / voxel_m) + (1 << 20)) & ((1 << 21) - 1);
+  };
+  return (enc(p.x()) << 42) | (enc(p.y()) << 21) | enc(p.z());
+}
+}  // namespace
+
+std::vector<Eigen::Vector3f> voxelCentroids(const std::vector<Eigen::Vector3f>& points, double voxel_m) {
+  if (voxel_m <= 0.0) return voxelDownsample(points, voxel_m);
+  std::unordered_map<int64_t, uint32_t> slot;
+  slot.reserve(points.size());
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<uint32_t> count;
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    const auto it = slot.emplace(voxelKey(p, voxel_m), static_cast<uint32_t>(sum.size()));
+    if (it.second) {
+      sum.push_back(Eigen::Vector3d::Zero());
+      count.push_back(0);
+    }
+    sum[it.first->second] += p.cast<double>();
+    ++count[it.first->second];
+  }
+  std::vector<Eigen::Vector3f> out(sum.size());
+  for (size_t i = 0; i < sum.size(); ++i) out[i] = (sum[i] / count[i]).cast<float>();
+  return out;
+}
+
 std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m) {
   std::vector<Eigen::Vector3f> out;
   out.reserve(points.size());
@@ -369,11 +400,7 @@ std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>&
   seen.reserve(points.size());
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
-    const auto enc = [voxel_m](float v) {
-      return static_cast<int64_t>(std::floor(v / voxel_m) + (1 << 20)) & ((1 << 21) - 1);
-    };
-    const int64_t k = (enc(p.x()) << 42) | (enc(p.y()) << 21) | enc(p.z());
-    if (seen.insert(k).second) out.push_back(p);
+    if (seen.insert(voxelKey(p, voxel_m)).second) out.push_back(p);
   }
   return out;
 }

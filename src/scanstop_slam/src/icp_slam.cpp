@@ -119,7 +119,7 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
     k.stamp_s = info.stamp_s;
     k.pose = info.map_pose;
     k.origin = info.sensor_origin.cast<float>();
-    if (config_.relax) k.points = voxelDownsample(scan.points, config_.relax_voxel_m);
+    if (config_.relax) k.points = sample(scan.points, config_.relax_voxel_m);
     kept_.push_back(std::move(k));
     graph_.setFixed(graph_.addNode(info.map_pose));
   }
@@ -262,13 +262,17 @@ std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
   return "";
 }
 
+std::vector<Eigen::Vector3f> IcpSlam::sample(const std::vector<Eigen::Vector3f>& points, double voxel_m) const {
+  return config_.source_centroids ? voxelCentroids(points, voxel_m) : voxelDownsample(points, voxel_m);
+}
+
 std::vector<Eigen::Vector3f> IcpSlam::coarseSource(const std::vector<Eigen::Vector3f>& source) const {
   // A sparser subset is plenty for the coarse stage and keeps its wider search cheap.
-  return voxelDownsample(source, std::max(config_.source_voxel_m, 0.05));
+  return sample(source, std::max(config_.source_voxel_m, 0.05));
 }
 
 std::vector<Eigen::Vector3f> IcpSlam::refineSource(const std::vector<Eigen::Vector3f>& source) const {
-  return config_.refine_source_voxel_m > config_.source_voxel_m ? voxelDownsample(source, config_.refine_source_voxel_m)
+  return config_.refine_source_voxel_m > config_.source_voxel_m ? sample(source, config_.refine_source_voxel_m)
                                                                  : source;
 }
 
@@ -286,7 +290,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   // Initial guess: the last corrected pose composed with the odometry delta since then. The first
   // scan defines the map: map = odom at the first scan.
   r.guess = count_ == 0 ? odom_pose : last_map_ * last_odom_.between(odom_pose);
-  const std::vector<Eigen::Vector3f> source = voxelDownsample(scan_base.points, config_.source_voxel_m);
+  const std::vector<Eigen::Vector3f> source = sample(scan_base.points, config_.source_voxel_m);
   const Eigen::Vector3f origin = sensor_origin.cast<float>();
   if (map_.size() == 0) {  // the first scan (or every earlier one was skipped) defines the map
     r.map_pose = r.guess;
@@ -359,7 +363,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   std::vector<size_t> update_nodes;
   if (config_.relax) {
     const auto relax_start = std::chrono::steady_clock::now();
-    kept_points = voxelDownsample(scan_base.points, config_.relax_voxel_m);
+    kept_points = sample(scan_base.points, config_.relax_voxel_m);
     graph.addNode(r.map_pose);
     try {
       addRelaxEdges(graph, kept_points, origin, r);

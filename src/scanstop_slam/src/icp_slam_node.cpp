@@ -55,6 +55,7 @@ class IcpSlamNode {
     optional("max_correction", config.icp.max_correction_m);
     optional("max_correction_angle", config.icp.max_correction_rad);
     optional("source_voxel", config.source_voxel_m);
+    optional("source_centroids", config.source_centroids);
     optional("max_points_per_voxel", config.max_points_per_voxel);
     optional("map_spacing", config.map_spacing_m);
     optional("coarse_c_max", config.coarse_c_max_m);

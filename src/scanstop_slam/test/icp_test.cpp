@@ -7,6 +7,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <set>
 #include <sstream>
@@ -1032,6 +1033,25 @@ TEST(IcpSlam, RegistrationReportsTheDegeneracyOfTheFinalStage) {
   EXPECT_LT(r.condition, 100.0);
   EXPECT_NEAR(r.map_pose.x, 1.0, 0.005);
 }
+
+
+TEST(VoxelCentroids, OnePointPerVoxelAtTheMeanOfItsPoints) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<Eigen::Vector3f> pts = {{0.01f, 0.01f, 0.01f}, {0.25f, 0.05f, 0.05f}, {0.03f, 0.05f, 0.07f},
+                                            {nan, 0.0f, 0.0f},     {0.05f, 0.03f, 0.03f}};
+  const std::vector<Eigen::Vector3f> c = voxelCentroids(pts, 0.1);
+  ASSERT_EQ(c.size(), 2u);  // in the order the voxels were first hit; the NaN point is left out
+  EXPECT_NEAR(c[0].x(), 0.03f, 1e-6);
+  EXPECT_NEAR(c[0].y(), 0.03f, 1e-6);
+  EXPECT_NEAR(c[0].z(), 0.11f / 3, 1e-6);
+  EXPECT_NEAR(c[1].x(), 0.25f, 1e-6);
+  EXPECT_EQ(voxelCentroids(pts, 0.0).size(), 4u);  // no voxel: the finite points unchanged
+  // voxelDownsample keeps the first point instead.
+  const std::vector<Eigen::Vector3f> f = voxelDownsample(pts, 0.1);
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[0], pts[0]);
+}
+
 
 }  // namespace
 }  // namespace slam

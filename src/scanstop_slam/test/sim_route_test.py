@@ -49,6 +49,10 @@ class SimRoute(unittest.TestCase):
         planes = rospy.get_param('~planes', 400)
         max_err_m = rospy.get_param('~max_error_m', 0.02)
         max_err_deg = rospy.get_param('~max_error_deg', 0.3)
+        # Every scan of the route, not only the last (the ATE): 0 = not checked.
+        max_route_err_m = rospy.get_param('~max_route_error_m', 0.0)
+        max_route_err_deg = rospy.get_param('~max_route_error_deg', 0.0)
+        worst = (0.0, 0.0, 0, 0)  # position error, yaw error and their scans
         self.truth = None
         rospy.Subscriber('ground_truth', Odometry, self.on_truth)
         for name in ('scanner/take_scan', 'slam/register_scan', 'base/rotate', 'base/forward'):
@@ -88,6 +92,15 @@ class SimRoute(unittest.TestCase):
             print('%4d  %8.2f %8.3f        %8.2f %8.3f           %4d      %6.2f' % (
                 i, 100 * slam_err[0], slam_err[1], 100 * odom_err[0], odom_err[1], reg.iterations, reg.duration_s))
             sys.stdout.flush()
+            worst = (max(worst[0], slam_err[0]), max(worst[1], slam_err[1]),
+                     i if slam_err[0] > worst[0] else worst[2], i if slam_err[1] > worst[1] else worst[3])
+        print('largest SLAM error on the route: %.2f cm (scan %d), %.3f deg (scan %d)' % (
+            100 * worst[0], worst[2], worst[1], worst[3]))
+        if max_route_err_m > 0:
+            self.assertLessEqual(worst[0], max_route_err_m, 'SLAM position error %.1f cm at scan %d' % (
+                100 * worst[0], worst[2]))
+        if max_route_err_deg > 0:
+            self.assertLessEqual(worst[1], max_route_err_deg, 'SLAM yaw error %.2f deg at scan %d' % (worst[1], worst[3]))
         self.assertLessEqual(slam_err[0], max_err_m, 'final SLAM position error %.1f cm' % (100 * slam_err[0]))
         self.assertLessEqual(slam_err[1], max_err_deg, 'final SLAM yaw error %.2f deg' % slam_err[1])
         # Odometry alone drifts far more on the same route (the point of the SLAM).

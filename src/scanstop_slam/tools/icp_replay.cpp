@@ -26,6 +26,8 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof] [--skip-bad]\n"
+    "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
+    "                  [--degeneracy-ratio R] [--no-remap]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
@@ -83,7 +85,7 @@ double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAn
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string map_dir, out_dir, truth_path, mode = "3dof";
+  std::string map_dir, out_dir, truth_path, mode = "3dof", method = slam::toString(slam::SlamConfig().icp.method);
   bool quiet = false, skip_bad = false;
   size_t max_scans = 0;
   slam::SlamConfig config;
@@ -93,6 +95,11 @@ int main(int argc, char** argv) {
       .text("--out", out_dir)
       .text("--truth", truth_path)
       .choice("--mode", mode, {"3dof", "6dof"})
+      .choice("--method", method, {"point_to_point", "point_to_plane"})
+      .flag("--source-centroids", config.source_centroids)
+      .flag("--no-source-centroids", config.source_centroids, false)
+      .real("--degeneracy-ratio", config.icp.degeneracy_ratio, 0.0, 1.0)
+      .flag("--no-remap", config.icp.degeneracy_remap, false)
       .flag("--skip-bad", skip_bad)
       .real("--c-max", config.icp.c_max_m, 0.001, 5.0)
       .real("--coarse-c-max", config.coarse_c_max_m, 0.0, 5.0)
@@ -126,6 +133,7 @@ int main(int argc, char** argv) {
       .real("--relax-loss-scale", config.graph.loss_scale, 1e-6, 1e6);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   config.icp.six_dof = mode == "6dof";
+  config.icp.method = slam::parseIcpMethod(method, "--method");
   try {
     try {
       config.validate();

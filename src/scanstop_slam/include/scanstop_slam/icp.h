@@ -231,5 +231,11 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
 /// Keeps one point per voxel (the first); voxel_m <= 0 returns the finite points unchanged.
 std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m);
 
+/// One point per voxel: the mean of the voxel's finite points (in the order the voxels were first
+/// hit); voxel_m <= 0 returns the finite points unchanged. Unlike voxelDownsample's first point,
+/// which sits where the scanner's sweep entered the voxel (a bias along the sweep, i.e. in yaw),
+/// the mean is unbiased and averages the range noise.
+std::vector<Eigen::Vector3f> voxelCentroids(const std::vector<Eigen::Vector3f>& points, double voxel_m);
+
 }  // namespace slam
 }  // namespace scanstop
