@@ -23,6 +23,7 @@ void SlamConfig::validate() const {
   requireInRange("refine_max_correction_angle", refine_max_correction_rad, 0.0, M_PI, "rad");
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
+  requireInRange("odom_scale_min_travel", odom_scale_min_travel_m, 0.01, 100.0, "m");
   requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
   requireInRange("max_odom_jump", max_odom_jump_m, 0.01, 100000.0, "m");
   requireInRange("relax_neighbours", relax_neighbours, 0, 100);
@@ -119,6 +120,8 @@ IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
     k.stamp_s = info.stamp_s;
     k.pose = info.map_pose;
     k.origin = info.sensor_origin.cast<float>();
+    k.odom = info.odom_pose;
+    k.scale_evidence = info.converged;
     if (config_.relax) k.points = sample(scan.points, config_.relax_voxel_m);
     kept_.push_back(std::move(k));
     graph_.setFixed(graph_.addNode(info.map_pose));
@@ -262,6 +265,25 @@ std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
   return "";
 }
 
+double IcpSlam::odomScale() const {
+  // Least squares k = sum(l o) / sum(o^2): o the odometry's translation of a leg, l the registered
+  // translation projected onto the odometry's direction.
+  double lo = 0.0, oo = 0.0;
+  int legs = 0;
+  for (size_t i = 1; i < kept_.size(); ++i) {
+    if (!kept_[i].scale_evidence) continue;
+    const Pose2D o = kept_[i - 1].odom.between(kept_[i].odom);
+    const double len = std::hypot(o.x, o.y);
+    if (len < config_.odom_scale_min_travel_m) continue;
+    const Pose2D m = kept_[i - 1].pose.between(kept_[i].pose);
+    lo += (m.x * o.x + m.y * o.y);
+    oo += len * len;
+    ++legs;
+  }
+  if (legs < 2 || oo <= 0.0) return 1.0;
+  return std::min(1.25, std::max(0.8, lo / oo));
+}
+
 std::vector<Eigen::Vector3f> IcpSlam::sample(const std::vector<Eigen::Vector3f>& points, double voxel_m) const {
   return config_.source_centroids ? voxelCentroids(points, voxel_m) : voxelDownsample(points, voxel_m);
 }
@@ -289,7 +311,15 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   r.index = static_cast<uint32_t>(dir_ ? static_cast<size_t>(dir_->nextIndex()) : count_);
   // Initial guess: the last corrected pose composed with the odometry delta since then. The first
   // scan defines the map: map = odom at the first scan.
-  r.guess = count_ == 0 ? odom_pose : last_map_ * last_odom_.between(odom_pose);
+  if (count_ == 0) {
+    r.guess = odom_pose;
+  } else {
+    Pose2D delta = last_odom_.between(odom_pose);
+    r.odom_scale = config_.odom_scale_estimation ? odomScale() : 1.0;
+    delta.x *= r.odom_scale;
+    delta.y *= r.odom_scale;
+    r.guess = last_map_ * delta;
+  }
   const std::vector<Eigen::Vector3f> source = sample(scan_base.points, config_.source_voxel_m);
   const Eigen::Vector3f origin = sensor_origin.cast<float>();
   if (map_.size() == 0) {  // the first scan (or every earlier one was skipped) defines the map
@@ -424,6 +454,8 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   k.pose = r.map_pose;
   k.points = std::move(kept_points);
   k.origin = origin;
+  k.odom = odom_pose;
+  k.scale_evidence = r.converged && !r.degenerate;
   kept_.push_back(std::move(k));
   if (config_.relax) graph_ = std::move(graph);
   else graph_.addNode(r.map_pose);

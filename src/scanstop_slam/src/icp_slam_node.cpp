@@ -56,6 +56,8 @@ class IcpSlamNode {
     optional("max_correction_angle", config.icp.max_correction_rad);
     optional("source_voxel", config.source_voxel_m);
     optional("source_centroids", config.source_centroids);
+    optional("odom_scale_estimation", config.odom_scale_estimation);
+    optional("odom_scale_min_travel", config.odom_scale_min_travel_m);
     optional("max_points_per_voxel", config.max_points_per_voxel);
     optional("map_spacing", config.map_spacing_m);
     optional("coarse_c_max", config.coarse_c_max_m);
@@ -248,9 +250,9 @@ class IcpSlamNode {
     res.scan_index = r.index;
     if (r.converged)
       ROS_INFO("icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s, "
-               "condition %.3g%s%s", r.index, r.map_pose.toString().c_str(), r.iterations, r.correspondences,
+               "condition %.3g%s%s, odometry scale %.4f", r.index, r.map_pose.toString().c_str(), r.iterations, r.correspondences,
                r.rms_m * 1000, r.time_s, r.condition, r.degenerate ? " (degenerate" : "",
-               r.degenerate ? (r.remapped ? ", guess kept along the weak direction)" : ")") : "");
+               r.degenerate ? (r.remapped ? ", guess kept along the weak direction)" : ")") : "", r.odom_scale);
     else
       ROS_WARN("icp_slam_node: scan %u: %s", r.index, res.message.c_str());
     if (r.refine_rejected)

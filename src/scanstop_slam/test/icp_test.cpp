@@ -1035,6 +1035,45 @@ TEST(IcpSlam, RegistrationReportsTheDegeneracyOfTheFinalStage) {
 }
 
 
+// The odometry reads 5 % long on every leg: after two registered legs the guess uses the scale
+// that maps the odometry onto the registrations, so a degenerate registration (which keeps the
+// guess along its weak direction) no longer inherits the odometry's scale error.
+TEST(IcpSlam, EstimatesTheOdometryScaleFromRegisteredLegs) {
+  std::mt19937 rng(17);
+  const std::vector<Eigen::Vector3f> world = roomPoints(rng, 60000);
+  const std::vector<Pose2D> truth = {{-1.5, 0, 0}, {-0.7, 0.2, 0.1}, {0.1, -0.2, -0.1}, {0.9, 0.3, 0.2}, {1.6, -0.1, 0.0}};
+  for (int estimate = 0; estimate < 2; ++estimate) {
+    SlamConfig config;
+    config.odom_scale_estimation = estimate == 1;
+    IcpSlam slam(config, "");
+    Pose2D odom = truth[0];
+    for (size_t i = 0; i < truth.size(); ++i) {
+      PointCloud scan;
+      scan.points = transformed(world, truth[i].toIsometry3d().inverse());
+      scan.setUnorganized();
+      if (i > 0) {
+        const Pose2D step = truth[i - 1].between(truth[i]);
+        odom = odom * Pose2D(step.x * 1.05, step.y * 1.05, step.yaw);
+      }
+      const Registration r = slam.registerScan(scan, odom, Eigen::Vector3d(0, 0, 0.45), i * 40.0);
+      ASSERT_TRUE(r.converged) << r.failure;
+      const double guess_err = std::hypot(r.guess.x - truth[i].x, r.guess.y - truth[i].y);
+      if (estimate == 0 || i < 3) {
+        EXPECT_EQ(r.odom_scale, 1.0) << "scan " << i;
+        if (i > 0) {
+          EXPECT_GT(guess_err, 0.03) << "scan " << i;  // 5 % of a 0.8 m leg
+        }
+      } else {
+        EXPECT_NEAR(r.odom_scale, 1.0 / 1.05, 0.003) << "scan " << i;
+        EXPECT_LT(guess_err, 0.004) << "scan " << i;
+      }
+    }
+  }
+  SlamConfig bad;
+  bad.odom_scale_min_travel_m = 0.0;
+  EXPECT_THROW(bad.validate(), std::exception);
+}
+
 TEST(VoxelCentroids, OnePointPerVoxelAtTheMeanOfItsPoints) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const std::vector<Eigen::Vector3f> pts = {{0.01f, 0.01f, 0.01f}, {0.25f, 0.05f, 0.05f}, {0.03f, 0.05f, 0.07f},

@@ -72,6 +72,14 @@ struct SlamConfig {
   bool source_centroids = true;
   int max_points_per_voxel = 30;  ///< map points kept per c_max voxel (bounds memory and query time)
   double map_spacing_m = 0.0;     ///< a map point joins only if none of its voxel is closer [m] (0 = first come)
+  /// Odometry scale: the initial guess scales the odometry's translation since the last scan by
+  /// the factor that maps the odometry's earlier legs onto the registered ones (least squares over
+  /// every converged, not degenerate registration after at least odom_scale_min_travel_m of
+  /// odometry travel; 1 until two such legs exist; clamped to [0.8, 1.25]). Where a registration
+  /// is degenerate (a corridor along its axis) the guess is what stands along the weak direction,
+  /// so an odometry that reads 3 % long (the thesis profile) otherwise drifts 3 cm per metre there.
+  bool odom_scale_estimation = true;
+  double odom_scale_min_travel_m = 0.3;  ///< [m], [0.01, 100]
   /// Request checks (registerScan refuses, changing nothing): a finite scan point farther than this
   /// from base_link is not a measurement [m], [0.1, 10000]
   double max_point_distance_m = 100.0;
@@ -172,6 +180,7 @@ struct Registration {
   /// for 3dof; x, y, z, rx, ry, rz for 6dof; empty without information) and whether remapping
   /// kept the guess along it.
   double condition = std::numeric_limits<double>::quiet_NaN();
+  double odom_scale = 1.0;  ///< the odometry scale the guess used (SlamConfig::odom_scale_estimation)
   bool degenerate = false;
   Eigen::VectorXd weak_direction;
   bool remapped = false;
@@ -242,7 +251,11 @@ class IcpSlam {
     Pose2D pose;                          ///< where the map holds it (applied)
     std::vector<Eigen::Vector3f> points;  ///< relax_voxel_m-downsampled, base_link (relax only)
     Eigen::Vector3f origin = Eigen::Vector3f::Zero();  ///< sensor origin in base_link
+    Pose2D odom;                ///< its odometry pose
+    bool scale_evidence = true;  ///< converged and not degenerate: its leg tells the odometry scale
   };
+  /// SlamConfig::odom_scale_estimation's factor from the kept scans' legs (1 without evidence).
+  double odomScale() const;
   std::vector<KeptScan> kept_;
   PoseGraph graph_;
   SlamConfig config_;
