@@ -121,9 +121,13 @@ class IcpSlamNode {
                         pnh.resolveName("odom_frame") + "' = '" + odom_frame_ + "' and '" +
                         pnh.resolveName("base_frame") + "' = '" + base_frame_ + "' must be three different frames");
     slam_ = std::make_unique<IcpSlam>(config, map_dir);
-    for (const SkippedScan& s : slam_->skippedScans())
-      ROS_ERROR("icp_slam_node: map directory problem, skipped: %s",
-                (s.reason.compare(0, s.file.size(), s.file) == 0 ? s.reason : s.file + ": " + s.reason).c_str());
+    for (const SkippedScan& s : slam_->skippedScans()) {
+      const std::string what = s.reason.compare(0, s.file.size(), s.file) == 0 ? s.reason : s.file + ": " + s.reason;
+      if (what.find("restored from poses_journal.csv") != std::string::npos)  // the scan ledger kept it: loaded
+        ROS_WARN("icp_slam_node: map directory problem, repaired: %s", what.c_str());
+      else
+        ROS_ERROR("icp_slam_node: map directory problem, skipped: %s", what.c_str());
+    }
     if (slam_->scanCount() > 0)
       ROS_INFO("icp_slam_node: resumed the map in %s with %zu scans (%zu skipped, %zu map points)", map_dir.c_str(),
                slam_->scanCount(), slam_->skippedScans().size(), slam_->map().size());
