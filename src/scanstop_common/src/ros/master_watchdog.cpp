@@ -40,6 +40,7 @@ struct RosMasterWatchdog::Shared {
   bool have_result = false;
   bool ended = false;
   std::string end_reason;
+  bool checker_exited = false;
 };
 
 RosMasterWatchdog::RosMasterWatchdog(std::string node, double timeout_s, Handlers handlers, double period_s)
@@ -65,6 +66,8 @@ RosMasterWatchdog::RosMasterWatchdog(std::string node, double timeout_s, Handler
       s->cv.notify_all();
       s->cv.wait_for(lock, std::chrono::duration<double>(s->period_s), [&] { return s->stop; });
     }
+    s->checker_exited = true;
+    s->cv.notify_all();
   }).detach();
   monitor_ = std::thread([s] {
     const double hung_after_s = std::max(2.0, 4.0 * s->period_s);
@@ -107,9 +110,12 @@ RosMasterWatchdog::RosMasterWatchdog(std::string node, double timeout_s, Handler
 
 RosMasterWatchdog::~RosMasterWatchdog() {
   {
-    std::lock_guard<std::mutex> lock(shared_->mutex);
+    std::unique_lock<std::mutex> lock(shared_->mutex);
     shared_->stop = true;
     shared_->cv.notify_all();
+    // Let a check in progress finish (it is quick unless the master hangs), so that the checker is
+    // not inside roscpp's XML-RPC client while the process exits.
+    shared_->cv.wait_for(lock, std::chrono::seconds(1), [this] { return shared_->checker_exited; });
   }
   if (monitor_.joinable()) monitor_.join();
 }
