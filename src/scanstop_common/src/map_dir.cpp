@@ -1,7 +1,9 @@
 #include "scanstop_common/map_dir.h"
 
 #include <dirent.h>
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -147,6 +149,29 @@ std::string formatLine(const MapScanInfo& s) {
   return out.str();
 }
 
+/// Appends data to the file at path and fsyncs it (the journal is append-only: never rewritten).
+/// A last line cut by a crash is ended first, so the new line is not glued onto it.
+void appendFileSynced(const std::string& path, std::string data) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_APPEND | O_CLOEXEC);
+  if (fd < 0) throw IoError(path, std::string("cannot open for appending: ") + std::strerror(errno));
+  struct stat st;
+  char last = '\n';
+  if (::fstat(fd, &st) == 0 && st.st_size > 0 && ::pread(fd, &last, 1, st.st_size - 1) == 1 && last != '\n')
+    data.insert(data.begin(), '\n');
+  size_t written = 0;
+  while (written < data.size()) {
+    const ssize_t n = ::write(fd, data.data() + written, data.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const std::string why = std::strerror(errno);
+      ::close(fd);
+      throw IoError(path, "write failed: " + why);
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) throw IoError(path, std::string("cannot flush to disk: ") + std::strerror(errno));
+}
+
 }  // namespace
 
 MapDirectory::MapDirectory(const std::string& dir) : dir_(dir) {
@@ -207,6 +232,7 @@ void MapDirectory::load() {
     all.push_back(info);
     first_line.push_back(line_no);
   }
+  restoreFromJournal(all, largest);
   std::stable_sort(all.begin(), all.end(), [](const MapScanInfo& a, const MapScanInfo& b) { return a.index < b.index; });
   for (const MapScanInfo& info : all) {
     const std::string path = dir_ + "/" + info.file;
@@ -253,6 +279,84 @@ void MapDirectory::load() {
   }
 }
 
+// The ledger: indices that poses.csv lost (a line that did not parse, a line cut off, an emptied file)
+// come back from the journal's last line for them, when that line names the index's own scan file and
+// no line of poses.csv names that file for another scan. They then go through the scan-file check like
+// every other line. Journal lines that do not parse are reported and ignored.
+// (A garbage line of poses.csv may name the file: that is the line being restored.)
+void MapDirectory::restoreFromJournal(std::vector<MapScanInfo>& all, long& largest) {
+  const std::string journal = journalPath();
+  struct stat st;
+  if (::stat(journal.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  std::string text;
+  try {
+    text = readFile(journal);
+  } catch (const IoError& e) {
+    problems_.push_back({journal, std::string(e.problem()) + "; nothing restored from it"});
+    return;
+  }
+  std::vector<std::pair<MapScanInfo, size_t>> latest;  // the last line of each index, with its line number
+  std::istringstream in(text);
+  std::string line;
+  size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line == kHeader) continue;
+    MapScanInfo info;
+    try {
+      info = parseLine(line);
+    } catch (const std::invalid_argument& e) {
+      problems_.push_back({journal, "line " + std::to_string(line_no) + ": " + e.what() + "; line ignored"});
+      continue;
+    }
+    const auto same = std::find_if(latest.begin(), latest.end(), [&](const auto& l) { return l.first.index == info.index; });
+    if (same != latest.end())
+      *same = {info, line_no};
+    else
+      latest.emplace_back(info, line_no);
+  }
+  const std::string poses = posesPath();
+  for (const auto& entry : latest) {
+    const MapScanInfo& info = entry.first;
+    if (std::any_of(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.index == info.index; })) continue;
+    const std::string where = "scan " + std::to_string(info.index) + " has no valid line in poses.csv; ";
+    if (info.file != scanFileName(info.index)) {
+      problems_.push_back({journal, "line " + std::to_string(entry.second) + ": " + where + "the journal line names " +
+                                        info.file + ", not " + scanFileName(info.index) + "; not restored"});
+      continue;
+    }
+    const auto owner = std::find_if(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == info.file; });
+    if (owner != all.end()) {
+      problems_.push_back({journal, "line " + std::to_string(entry.second) + ": " + where + "its file " + info.file +
+                                        " belongs to scan " + std::to_string(owner->index) + " in poses.csv; not restored"});
+      continue;
+    }
+    problems_.push_back({poses, where + "restored from poses_journal.csv line " + std::to_string(entry.second)});
+    all.push_back(info);
+    restored_.push_back(info.index);
+    largest = std::max<long>(largest, info.index);
+  }
+}
+
+void MapDirectory::writeJournal(const std::vector<MapScanInfo>& rows) const {
+  const std::string journal = journalPath();
+  struct stat st;
+  std::string out;
+  for (const MapScanInfo& s : rows) out += formatLine(s) + "\n";
+  if (::stat(journal.c_str(), &st) == 0) {
+    appendFileSynced(journal, out);
+    return;
+  }
+  // A map written before the journal existed: seed it with every line poses.csv holds.
+  std::vector<MapScanInfo> all = scans_;
+  all.insert(all.end(), skipped_.begin(), skipped_.end());
+  std::sort(all.begin(), all.end(), [](const MapScanInfo& a, const MapScanInfo& b) { return a.index < b.index; });
+  std::string seed = std::string(kHeader) + "\n";
+  for (const MapScanInfo& s : all) seed += formatLine(s) + "\n";
+  writeFileAtomic(journal, seed + out);
+}
+
 void MapDirectory::setNextIndex(uint32_t candidate) {
   next_index_ = candidate;
   while (std::find(named_files_.begin(), named_files_.end(), scanFileName(next_index_)) != named_files_.end()) ++next_index_;
@@ -268,6 +372,7 @@ void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
   }
   info.file = scanFileName(info.index);
   writeCloud(dir_ + "/" + info.file, removeNonFinite(cloud_base));
+  writeJournal({info});  // before poses.csv: a line poses.csv loses comes back from here
   scans_.push_back(info);
   try {
     writePoses();
@@ -284,8 +389,10 @@ void MapDirectory::updateInfo(const MapScanInfo& info) {
   if (it == scans_.end())
     throw IoError(posesPath(), "cannot update scan " + std::to_string(info.index) + ": no such scan");
   const MapScanInfo old = *it;
-  *it = info;
-  it->file = old.file;
+  MapScanInfo updated = info;
+  updated.file = old.file;
+  writeJournal({updated});
+  *it = updated;
   try {
     writePoses();
   } catch (...) {
@@ -316,12 +423,19 @@ uint32_t MapDirectory::updatePoses(const std::vector<std::pair<uint32_t, Pose2D>
     changed = true;
   }
   if (!changed) return pose_revision_;
+  std::vector<MapScanInfo> moved;
+  for (const MapScanInfo& s : updated) {
+    const auto before = std::find_if(scans_.begin(), scans_.end(), [&](const MapScanInfo& o) { return o.index == s.index; });
+    if (before->map_pose.x != s.map_pose.x || before->map_pose.y != s.map_pose.y || before->map_pose.yaw != s.map_pose.yaw)
+      moved.push_back(s);
+  }
   const std::string history = poseHistoryPath();
   struct stat st;
   std::string text = ::stat(history.c_str(), &st) == 0 ? readFile(history) : std::string();
   if (text.empty()) text = std::string(kHistoryHeader) + "\n";
   if (text.back() != '\n') text += '\n';
   writeFileAtomic(history, text + old_lines.str());
+  writeJournal(moved);
   std::swap(scans_, updated);
   try {
     writePoses();

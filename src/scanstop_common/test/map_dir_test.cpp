@@ -156,6 +156,10 @@ void replaceLine(const std::string& file, size_t line_no, const std::string& tex
   std::ofstream(file, std::ios::binary) << out;
 }
 
+/// Removes the map's journal: the map as written before the ledger existed (poses.csv alone), for the
+/// tests of how poses.csv itself is read.
+void dropJournal(const std::string& dir) { ASSERT_EQ(std::remove((dir + "/poses_journal.csv").c_str()), 0); }
+
 TEST(MapDirectory, HealthyMapHasNoProblems) {
   TempDir tmp;
   const MapDirectory map(makeMap(tmp, 3));
@@ -213,7 +217,9 @@ TEST(MapDirectory, MissingAndGarbageScansAreReportedAndSkipped) {
 
 TEST(MapDirectory, GarbageLineInPosesIsReportedSkippedAndRepaired) {
   TempDir tmp;
+  // Without the journal (a map written before it); with it, see the ScanLedger tests.
   const std::string dir = makeMap(tmp, 3);
+  dropJournal(dir);
   const std::string poses = dir + "/poses.csv";
   replaceLine(poses, 3, "1,scans/scan_0001.pcd,40,abc");
   PointCloud cloud;
@@ -234,7 +240,9 @@ TEST(MapDirectory, GarbageLineInPosesIsReportedSkippedAndRepaired) {
 
 TEST(MapDirectory, BadValuesInPosesAreReportedByLine) {
   TempDir tmp;
+  // Without the journal (a map written before it); with it, see the ScanLedger tests.
   const std::string dir = makeMap(tmp, 5);
+  dropJournal(dir);
   const std::string poses = dir + "/poses.csv";
   const std::string tail = ",0,0,0,0,0,0,0,0,0,1,0,0,0,0";
   replaceLine(poses, 2, "-1,scans/scan_0000.pcd,0" + tail);              // negative index
@@ -315,7 +323,9 @@ TEST(MapDirectory, NextIndexAfterAppendSkipsANamedFile) {
 
 TEST(MapDirectory, PosesCutMidLineKeepsTheCompleteLines) {
   TempDir tmp;
+  // Without the journal (a map written before it); with it, see the ScanLedger tests.
   const std::string dir = makeMap(tmp, 3);
+  dropJournal(dir);
   const std::string poses = dir + "/poses.csv";
   const std::string text = readFile(poses);
   std::ofstream(poses, std::ios::binary | std::ios::trunc) << text.substr(0, text.size() - 20);
@@ -327,7 +337,9 @@ TEST(MapDirectory, PosesCutMidLineKeepsTheCompleteLines) {
 
 TEST(MapDirectory, EmptyOrHeaderlessPosesFile) {
   TempDir tmp;
+  // Without the journal (a map written before it); with it, see the ScanLedger tests.
   const std::string dir = makeMap(tmp, 2);
+  dropJournal(dir);
   const std::string poses = dir + "/poses.csv";
   const std::string text = readFile(poses);
   std::ofstream(poses, std::ios::trunc);
@@ -367,6 +379,122 @@ TEST(MapDirectory, InterruptedAppendLeavesAnOrphanThatTheNextScanReplaces) {
   const MapDirectory again(dir);
   EXPECT_TRUE(again.problems().empty());
   EXPECT_EQ(again.loadScan(2).points.at(0), Eigen::Vector3f(6, 6, 6));
+}
+
+// The scan ledger (issue #22 class 8): poses.csv corrupted (a garbage line, the last line cut), then
+// SLAM restarts and goes on: before the journal, scan 5's and scan 7's lines were lost for good (the
+// mission counted 8 scans, the mesh used 6), and scan 7's file was even overwritten by the next scan.
+TEST(ScanLedger, CorruptPosesPlusRestartKeepsEveryScanExactlyOnce) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 8);
+  const std::string poses = dir + "/poses.csv";
+  const std::vector<MapScanInfo> before = MapDirectory(dir).scans();
+  ASSERT_EQ(before.size(), 8u);
+  replaceLine(poses, 7, "5,scans/scan_0005.pcd,200,#garbage#");                 // scan 5's line
+  const std::string text = readFile(poses);
+  std::ofstream(poses, std::ios::binary | std::ios::trunc) << text.substr(0, text.find("\n7,") + 2);  // "7," left
+  PointCloud cloud;
+  cloud.push_back({7, 7, 7});
+  {
+    MapDirectory restarted(dir);  // icp_slam_node restarted while the mission was paused
+    EXPECT_EQ(indices(restarted), (std::vector<uint32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
+    EXPECT_EQ(restarted.restored(), (std::vector<uint32_t>{5, 7}));
+    std::vector<std::string> messages;
+    for (const MapProblem& p : restarted.problems()) messages.push_back(p.message());
+    ASSERT_EQ(messages.size(), 4u) << messages.front();
+    EXPECT_NE(messages[2].find(poses + ": scan 5 has no valid line in poses.csv; restored from poses_journal.csv line 7"),
+              std::string::npos) << messages[2];
+    EXPECT_NE(messages[3].find("scan 7 has no valid line in poses.csv; restored from poses_journal.csv line 9"),
+              std::string::npos) << messages[3];
+    EXPECT_EQ(restarted.nextIndex(), 8u);  // not 7: scan 7's file is never overwritten
+    restarted.append(info(8, Pose2D(8, 0, 0)), cloud);  // the mission resumes: the next scan
+  }
+  const MapDirectory again(dir);
+  EXPECT_TRUE(again.problems().empty()) << again.problems().front().message();
+  ASSERT_EQ(indices(again), (std::vector<uint32_t>{0, 1, 2, 3, 4, 5, 6, 7, 8}));
+  for (size_t i = 0; i < before.size(); ++i) {
+    EXPECT_EQ(again.scans()[i].file, before[i].file);
+    EXPECT_EQ(again.scans()[i].map_pose.x, before[i].map_pose.x);
+    EXPECT_EQ(again.scans()[i].stamp_s, before[i].stamp_s);
+    EXPECT_EQ(again.loadScan(i).size(), 100u) << "scan " << i << " is the scan taken then";
+  }
+  EXPECT_EQ(again.loadScan(8).points.at(0), Eigen::Vector3f(7, 7, 7));
+  // The count agrees with the scan files themselves: one file per scan, one scan per file.
+  size_t files = 0;
+  for (uint32_t i = 0; i < 12; ++i) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "/scans/scan_%04u.pcd", i);
+    struct stat st;
+    if (::stat((dir + name).c_str(), &st) == 0) ++files;
+  }
+  EXPECT_EQ(files, again.size());
+}
+
+// The journal holds the latest pose of every scan: a relaxation's poses and an updateInfo come back.
+TEST(ScanLedger, EmptiedPosesIsRestoredWithTheLatestPoses) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  {
+    MapDirectory map(dir);
+    ASSERT_EQ(map.updatePoses({{0, Pose2D(0.5, 0.25, 0.125)}, {2, Pose2D(2.5, 0, 0)}}), 1u);
+    MapScanInfo again = map.scans()[1];
+    again.map_pose = Pose2D(1.5, 0.5, 0.0);
+    again.converged = true;
+    map.updateInfo(again);
+  }
+  std::ofstream(dir + "/poses.csv", std::ios::trunc);
+  const MapDirectory map(dir);
+  ASSERT_EQ(indices(map), (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_EQ(map.scans()[0].map_pose.x, 0.5);
+  EXPECT_EQ(map.scans()[0].map_pose.y, 0.25);
+  EXPECT_EQ(map.scans()[1].map_pose.x, 1.5);
+  EXPECT_TRUE(map.scans()[1].converged);
+  EXPECT_EQ(map.scans()[2].map_pose.x, 2.5);
+  EXPECT_EQ(map.nextIndex(), 3u);
+  EXPECT_EQ(map.restored().size(), 3u);
+}
+
+// A map written before the journal: the first write seeds it with every line poses.csv holds.
+TEST(ScanLedger, AMapWithoutAJournalGetsOneSeededWithEveryLine) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  dropJournal(dir);
+  PointCloud cloud;
+  cloud.push_back({1, 1, 1});
+  MapDirectory(dir).append(info(3, Pose2D(3, 0, 0)), cloud);
+  replaceLine(dir + "/poses.csv", 2, "garbage");  // scan 0's line
+  const MapDirectory map(dir);
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1, 2, 3}));
+  EXPECT_EQ(map.restored(), (std::vector<uint32_t>{0}));
+}
+
+// What the journal cannot vouch for is named, never silently used: a journal line naming another
+// index's file, a line whose file poses.csv gives to another scan, a garbage journal line. A journal
+// cut mid-line (a crash while appending) gets the next line on a line of its own.
+TEST(ScanLedger, JournalLinesThatCannotBeTrustedAreNamedAndNotRestored) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  const std::string poses = dir + "/poses.csv";
+  const std::string journal = dir + "/poses_journal.csv";
+  {
+    std::ofstream(journal, std::ios::app) << "1,scans/scan_0001.pcd,40,cut mid-li";  // no newline
+    PointCloud cloud;
+    cloud.push_back({1, 1, 1});
+    MapDirectory(dir).append(info(3, Pose2D(3, 0, 0)), cloud);
+  }
+  std::ofstream(journal, std::ios::app) << "4,scans/scan_0002.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  replaceLine(poses, 3, "1,scans/scan_0003.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0");  // scan 1's line names scan 3's file
+  replaceLine(poses, 5, "garbage");                                               // scan 3's line
+  const MapDirectory map(dir);
+  std::string all;
+  for (const MapProblem& p : map.problems()) all += p.message() + "\n";
+  EXPECT_NE(all.find(journal + ": line 5: expected 17 comma-separated values, found 4; line ignored"), std::string::npos) << all;
+  EXPECT_NE(all.find(journal + ": line 7: scan 4 has no valid line in poses.csv; the journal line names scans/scan_0002.pcd, "
+                               "not scans/scan_0004.pcd; not restored"), std::string::npos) << all;
+  EXPECT_NE(all.find("scan 3 has no valid line in poses.csv; its file scans/scan_0003.pcd belongs to scan 1 in "
+                     "poses.csv; not restored"), std::string::npos) << all;
+  EXPECT_TRUE(map.restored().empty());
+  EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1, 2}));
 }
 
 TEST(MapDirectory, PosesPathThatIsNotAFileIsAnError) {

@@ -1,5 +1,7 @@
 // explorer_node: see scanstop_explorer/explorer_ros.h.
 #include "scanstop_common/error.h"
+#include "scanstop_common/ros/master_watchdog.h"
+#include "scanstop_common/ros/params.h"
 #include "scanstop_explorer/explorer_ros.h"
 
 int main(int argc, char** argv) {
@@ -8,8 +10,13 @@ int main(int argc, char** argv) {
   // naming a bad parameter would no longer be printed.
   ros::NodeHandle nh, pnh("~");
   try {
+    double master_timeout = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
     scanstop::explorer::ExplorerNode node(nh, pnh);
+    // The ROS master gone: ERROR once; gone longer than master_timeout (or a new master): end.
+    scanstop::RosMasterWatchdog watchdog("explorer_node", master_timeout);
     ros::spin();
+    if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {
     ROS_FATAL("explorer_node: %s", e.what());
     return 1;

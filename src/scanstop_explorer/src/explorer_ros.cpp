@@ -35,6 +35,8 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
     ros_params::optional(nh, name, value);
   };
   optional(pnh, "frame_id", n.frame_id);
+  double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
+  optional(pnh, "master_timeout", master_timeout);
   optional(pnh, "map_dir", n.map_dir);
   optional(pnh, "run_dir", n.run_dir);
   optional(pnh, "image_scale", n.image_scale);

@@ -1,13 +1,20 @@
 #include <ros/ros.h>
 
+#include "scanstop_common/ros/master_watchdog.h"
+#include "scanstop_common/ros/params.h"
 #include "scanstop_mesher/bpa_mesher_node.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "bpa_mesher_node");
   ros::NodeHandle nh, pnh("~");
   try {
+    double master_timeout = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
     scanstop::mesher::BpaMesherNode node(nh, pnh);
+    // The ROS master gone: ERROR once; gone longer than master_timeout (or a new master): end.
+    scanstop::RosMasterWatchdog watchdog("bpa_mesher_node", master_timeout);
     ros::spin();
+    if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {
     ROS_FATAL("bpa_mesher_node: %s", e.what());
     return 1;

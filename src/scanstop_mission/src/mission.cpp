@@ -255,6 +255,15 @@ bool Mission::abort(std::string* why) {
   return true;
 }
 
+void Mission::end(const std::string& reason) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    end_reason_ = reason;
+    control_ = Control::Abort;
+  }
+  control_cv_.notify_all();
+}
+
 bool Mission::paused() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return control_ == Control::Pause;
@@ -513,14 +522,30 @@ bool Mission::contactBoundReached() const {
 }
 
 State Mission::run() {
+  std::string ended;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    control_ = Control::Run;  // a new run after an abort starts afresh
+    ended = end_reason_;
+    if (ended.empty()) control_ = Control::Run;  // a new run after an abort starts afresh
+  }
+  if (!ended.empty()) {  // ended before it ran (the ROS master gone while it waited for mission/start)
+    started_ = std::chrono::steady_clock::now();
+    setState(State::Failed);
+    event("mission FAILED before it started: " + ended, true);
+    save();
+    return State::Failed;
   }
   started_ = std::chrono::steady_clock::now();
   info_("mission started in " + config_.run_dir + " (" + std::to_string(config_.planes) + " planes per scan" +
         (config_.max_scans > 0 ? ", at most " + std::to_string(config_.max_scans) + " scans" : std::string()) + ")");
-  const auto finish = [this](State s, const std::string& why) {
+  const auto finish = [this](State s, std::string why) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (s == State::Aborted && !end_reason_.empty()) {  // end(): not the user's abort
+        s = State::Failed;
+        why = end_reason_;
+      }
+    }
     adoptCurrentPoses();  // the report's trajectory and errors use the poses as finally optimized
     setState(s);
     event(std::string("mission ") + toString(s) + ": " + why, s == State::Failed);
@@ -583,6 +608,7 @@ State Mission::run() {
       if (back) ++home_plans;
       for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
         backoff(attempt);
+        if (!checkControl()) return finish(State::Aborted, "aborted by the user");  // paused: no retry burnt
         plan = robot_.planNext(now.estimate(), now.unreachable, now.contacts, goal);
         if (plan.success) break;
         event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);

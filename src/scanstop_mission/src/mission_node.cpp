@@ -7,6 +7,7 @@
 #include <scanstop_msgs/MissionStatus.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -137,6 +138,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   bool autostart = true;
   ros_params::optional(pnh, "autostart", autostart);
   ros_params::optional(pnh, "shutdown_when_done", shutdown_when_done_);
+  ros_params::optional(pnh, "master_timeout", master_timeout_s_);
   // A misspelt parameter would silently keep its default: refuse it.
   const std::vector<std::string> unknown = ros_params::unknownParameters(
       pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
@@ -144,7 +146,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
             "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
-            "robot_radius", "explorer_ns", "run_identity"});
+            "robot_radius", "explorer_ns", "run_identity", "master_timeout"});
   if (!unknown.empty()) {
     std::string names;
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
@@ -153,7 +155,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
                       "contact_backoff, contact_offset, max_contacts, leg_check, leg_check_radius, leg_check_margin, leg_check_min_z, "
                       "leg_check_max_z, leg_check_self, leg_check_min_points, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
-                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns, run_identity");
+                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns, run_identity, "
+                      "master_timeout");
   }
   try {
     config_.validate();
@@ -315,6 +318,38 @@ void MissionNode::runMission() {
     }
     ros::shutdown();
   }
+}
+
+void MissionNode::onMasterLost(const std::string& why) {
+  std::string refused;
+  const bool paused = mission_->pause(&refused);
+  paused_for_master_ = paused;
+  mission_->note(why + (paused ? "; the mission pauses (its state is kept) until the master is back"
+                               : "; the mission stays as it is (" + refused + ")"),
+                 true);
+  if (paused) ROS_ERROR("mission: paused until the ROS master is back (state kept in %s)", config_.run_dir.c_str());
+}
+
+void MissionNode::onMasterBack(const std::string& why) {
+  const bool resume = paused_for_master_.exchange(false);
+  mission_->note(why + (resume ? "; the mission resumes" : ""));
+  if (resume && mission_->resume()) ROS_WARN("mission: resumed: the ROS master is back");
+}
+
+void MissionNode::onMasterEnd(const std::string& why) {
+  ROS_ERROR("mission: ending the mission: %s", why.c_str());
+  mission_->end(why);
+  mission_->resume();  // a paused run wakes up and ends
+  const bool was_running = running_;
+  // The run ends at its next check (a step in a service call first ends as that call does); then
+  // the report and summary are written. Then the node ends.
+  while (running_) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  if (!was_running) {
+    mission_->run();  // not started: ends FAILED at once naming why, and saves the state
+    ros::WallTimerEvent none;
+    publishStatus(none);
+  }
+  ros::requestShutdown();
 }
 
 bool MissionNode::onStart(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {

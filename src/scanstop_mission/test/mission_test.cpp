@@ -909,6 +909,59 @@ TEST(Mission, PauseHoldsAndResumeContinues) {
   EXPECT_TRUE(m.snapshot().complete);
 }
 
+// The ROS master gone (issue #22 class 5): the watchdog pauses the mission (state kept), and when
+// the master stays away longer than master_timeout ends it: FAILED with the watchdog's reason, the
+// state saved with every scan, and a restarted mission_node resumes and completes it.
+TEST(Mission, EndedForTheMasterFailsNamingTheReasonKeepsItsStateAndResumes) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{1, 0}, {2, 1}, {1, 2}, {0, 2}};
+  const std::string reason =
+      "the ROS master at http://127.0.0.1:11471 has been unreachable for 3.0 s (master_timeout = 3.0 s)";
+  {
+    Mission first(config(dir.path()), sys, quiet, quiet);
+    sys.on_scan = [&first](int n) {
+      if (n == 2) first.pause();  // the master is lost during the second scan
+    };
+    std::thread runner([&first] { EXPECT_EQ(first.run(), State::Failed); });
+    bool paused_seen = false;
+    for (int i = 0; i < 2500 && !paused_seen; ++i) {  // up to 5 s
+      paused_seen = first.snapshot().state == State::Paused;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    EXPECT_TRUE(paused_seen);
+    const int scans_while_paused = sys.scans_taken;
+    first.end(reason);
+    runner.join();
+    EXPECT_EQ(sys.scans_taken, scans_while_paused);  // nothing more was done
+    const MissionState s = first.snapshot();
+    EXPECT_EQ(s.state, State::Failed);
+    EXPECT_NE(s.last_error.find(reason), std::string::npos) << s.last_error;
+    EXPECT_NE(s.events.back().what.find("mission FAILED: " + reason), std::string::npos) << s.events.back().what;
+    EXPECT_EQ(s.scans.size(), 2u);
+  }
+  sys.on_scan = nullptr;
+  const MissionState saved = MissionState::load(dir.path() + "/mission_state.yaml");
+  EXPECT_EQ(saved.state, State::Failed);
+  ASSERT_EQ(saved.scans.size(), 2u);
+  Mission second(config(dir.path()), sys, quiet, quiet);
+  EXPECT_TRUE(second.loadSavedState());
+  EXPECT_EQ(second.snapshot().scans.size(), 2u);
+  EXPECT_EQ(second.run(), State::Done);
+  const MissionState s = second.snapshot();
+  ASSERT_EQ(s.scans.size(), sys.slam_poses.size());
+  for (size_t i = 0; i < s.scans.size(); ++i) EXPECT_EQ(s.scans[i].index, static_cast<int>(i));
+
+  // Ended before it ran (the master gone while the mission waited for mission/start).
+  const int scans_after_resume = sys.scans_taken;
+  Mission idle(config(dir.path() + "/idle"), sys, quiet, quiet);
+  idle.end(reason);
+  EXPECT_EQ(idle.run(), State::Failed);
+  EXPECT_NE(idle.snapshot().last_error.find("mission FAILED before it started: " + reason), std::string::npos);
+  EXPECT_EQ(MissionState::load(dir.path() + "/idle/mission_state.yaml").state, State::Failed);
+  EXPECT_EQ(sys.scans_taken, scans_after_resume);  // nothing done
+}
+
 TEST(Mission, PlanningFailuresAreRetriedThenTheMissionFailsWithTheReason) {
   TempDir dir;
   FakeSystem sys;

@@ -96,6 +96,7 @@ bool PioneerDriver::commandVelocity(double v_mps, double w_radps, std::string* r
   if (!std::isfinite(v_mps) || !std::isfinite(w_radps)) return refuse("velocity is not finite");
   if (status_.link != LinkState::kConnected) return refuse("not connected to the robot");
   if (status_.motion_active || request_) return refuse("a rotate/forward motion is running");
+  if (!halted_.empty()) return refuse("refused: " + halted_);
   teleop_v_ = std::clamp(v_mps, -config_.max_linear_speed_mps, config_.max_linear_speed_mps);
   teleop_w_ = std::clamp(w_radps, -config_.max_angular_speed_radps, config_.max_angular_speed_radps);
   teleop_t_ = monotonicSeconds();
@@ -132,6 +133,10 @@ MotionResult PioneerDriver::runMotion(MotionKind kind, double target) {
     failed.message = "another rotate/forward motion is running";
     return failed;
   }
+  if (!halted_.empty()) {
+    failed.message = "refused: " + halted_;
+    return failed;
+  }
   request_ = MotionRequest{kind, target};
   result_.reset();
   cancel_motion_ = false;
@@ -142,6 +147,7 @@ MotionResult PioneerDriver::runMotion(MotionKind kind, double target) {
   if (!done) {
     // The I/O thread did not finish in time (it should always do): ask it to abort, wait briefly.
     cancel_motion_ = true;
+    cancel_reason_ = "cancelled: the motion exceeded the driver's time limit";
     cv_.wait_for(lock, std::chrono::duration<double>(2.0), [this] { return result_.has_value(); });
   }
   if (result_) {
@@ -152,6 +158,22 @@ MotionResult PioneerDriver::runMotion(MotionKind kind, double target) {
   request_.reset();
   failed.message = "the driver did not finish the motion within " + seconds(limit_s);
   return failed;
+}
+
+void PioneerDriver::halt(const std::string& reason) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  halted_ = reason;
+  status_.teleop_active = false;  // the I/O thread then sends STOP (setpoints were non-zero)
+  teleop_t_ = -1.0;
+  if (status_.motion_active || request_) {
+    cancel_motion_ = true;
+    cancel_reason_ = "stopped: " + reason;
+  }
+}
+
+void PioneerDriver::allowMotion() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  halted_.clear();
 }
 
 void PioneerDriver::run() {
@@ -290,7 +312,12 @@ void PioneerDriver::serve() {
       }
       if (motion_ && cancel) {
         sendStop(false, now);
-        motion_->abort("cancelled: the motion exceeded the driver's time limit", now);
+        std::string why;
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          why = cancel_reason_;
+        }
+        motion_->abort(why, now);
         std::lock_guard<std::mutex> lock(mutex_);
         finishMotion();
       }

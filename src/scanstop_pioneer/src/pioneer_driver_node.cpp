@@ -24,7 +24,7 @@ const char* const kKnownParameters[] = {
     "motion/angular_decel", "motion/approach_distance", "motion/approach_angle", "motion/distance_tolerance",
     "motion/angle_tolerance", "motion/timeout_factor", "motion/timeout_extra", "motion/stall_time",
     "motion/motors_disabled_time", "motion/settle_timeout", "motion/max_forward", "motion/max_rotate",
-    "diagnostic_period"};
+    "diagnostic_period", "master_timeout"};
 
 template <typename T>
 void opt(const ros::NodeHandle& pnh, const std::string& name, T& value) {
@@ -118,6 +118,16 @@ PioneerDriverNode::PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   ROS_INFO("pioneer_driver: port %s at %d baud, robot subclass %s", config.port.c_str(), config.baud,
            config.robot.subclass.c_str());
   driver_->start();
+}
+
+void PioneerDriverNode::onMasterLost(const std::string& why) {
+  ROS_ERROR("pioneer_driver: stopping the robot and refusing motions until the ROS master is back");
+  driver_->halt(why);
+}
+
+void PioneerDriverNode::onMasterBack() {
+  ROS_WARN("pioneer_driver: the ROS master is back: motions accepted again");
+  driver_->allowMotion();
 }
 
 PioneerDriverNode::~PioneerDriverNode() {

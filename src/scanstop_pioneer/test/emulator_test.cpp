@@ -261,6 +261,40 @@ TEST_F(DriverOnEmulator, CmdVelTimeoutStopsTheRobot) {
   EXPECT_EQ(driver_->status().cmd_vel_timeouts, 1u);
 }
 
+// The ROS master gone (issue #22 class 5): the node's watchdog calls halt(): a running forward motion
+// stops short and says why, teleoperation stops, and motions and velocity commands are refused until
+// allowMotion() (the master back).
+TEST_F(DriverOnEmulator, HaltStopsARunningMotionAndRefusesMotionsUntilAllowed) {
+  const std::string why = "the ROS master at http://127.0.0.1:11471 is unreachable (gone for 1.0 s)";
+  MotionResult running;
+  std::thread motion([&] { running = driver_->forward(2.0); });
+  // Poll until the robot drives (deadline 10 s), then halt.
+  for (int i = 0; i < 200 && emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }) < 0.05; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_GT(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.05);
+  driver_->halt(why);
+  motion.join();
+  EXPECT_FALSE(running.success);
+  EXPECT_NE(running.message.find("stopped: " + why), std::string::npos) << running.message;
+  EXPECT_LT(running.achieved, 1.5);
+  // The robot comes to a standstill (polled, deadline 5 s).
+  for (int i = 0; i < 100 && emu_->with([](RobotEmulator& e) { return std::abs(e.linearVelocity()); }) > 1e-9; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_NEAR(emu_->with([](RobotEmulator& e) { return e.linearVelocity(); }), 0.0, 1e-9);
+  const scanstop::Pose2D stopped = truth();
+  const MotionResult refused = driver_->rotate(0.5);
+  EXPECT_FALSE(refused.success);
+  EXPECT_EQ(refused.message, "refused: " + why);
+  std::string reason;
+  EXPECT_FALSE(driver_->commandVelocity(0.2, 0.0, &reason));
+  EXPECT_EQ(reason, "refused: " + why);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(truth().toString(), stopped.toString());  // nothing moved
+  driver_->allowMotion();
+  const MotionResult again = driver_->rotate(0.5);
+  EXPECT_TRUE(again.success) << again.message;
+}
+
 // ---- Bad requests and speed bounds (issue 9).
 
 TEST_F(DriverOnEmulator, BadRequestsAreRefusedAndMoveNothing) {

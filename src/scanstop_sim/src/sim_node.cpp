@@ -341,8 +341,27 @@ void SimNode::publishClearance(const char* motion, double command, const MotionO
   clearance_pub_.publish(m);
 }
 
+void SimNode::onMasterLost(const std::string& why) {
+  ROS_ERROR("sim_node: refusing motions until the ROS master is back");
+  std::lock_guard<std::mutex> lock(master_mutex_);
+  master_lost_ = why;
+}
+
+void SimNode::onMasterBack() {
+  ROS_WARN("sim_node: the ROS master is back: motions accepted again");
+  std::lock_guard<std::mutex> lock(master_mutex_);
+  master_lost_.clear();
+}
+
 MotionOutput SimNode::runMotion(const std::function<MotionOutput()>& motion, double distance_m, double angle_rad,
                                 std::string* refused) {
+  {
+    std::lock_guard<std::mutex> lock(master_mutex_);
+    if (!master_lost_.empty()) {
+      *refused = "refused: " + master_lost_;
+      return MotionOutput();
+    }
+  }
   if (moving_.exchange(true)) {
     *refused = "another rotate/forward motion is running";
     return MotionOutput();

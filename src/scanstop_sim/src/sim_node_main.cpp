@@ -6,6 +6,8 @@
 #include <iterator>
 #include <string>
 
+#include "scanstop_common/ros/master_watchdog.h"
+#include "scanstop_common/ros/params.h"
 #include "scanstop_sim/sim_node.h"
 
 namespace {
@@ -22,11 +24,23 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "sim_node");
   ros::NodeHandle nh, pnh("~");
   try {
+    double master_timeout = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
     scanstop::sim::SimNode node(nh, pnh);
+    // The ROS master gone: refuse motions (the robot stands); gone longer than master_timeout: end.
+    scanstop::RosMasterWatchdog::Handlers handlers;
+    handlers.on_lost = [&node](const std::string& why) { node.onMasterLost(why); };
+    handlers.on_back = [&node](const std::string&) { node.onMasterBack(); };
+    handlers.on_end = [&node](const std::string& why) {
+      node.onMasterLost(why);
+      ros::requestShutdown();
+    };
+    scanstop::RosMasterWatchdog watchdog("sim_node", master_timeout, handlers);
     // Several threads: a scan request during a (wall-clock timed) motion is answered at once.
     ros::AsyncSpinner spinner(3);
     spinner.start();
     ros::waitForShutdown();
+    if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {
     ROS_FATAL("sim_node: %s", e.what());
     // A start-up error (world file, start pose, parameters) repeats on every respawn: with

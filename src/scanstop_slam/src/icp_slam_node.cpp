@@ -18,6 +18,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/master_watchdog.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_slam/icp_slam.h"
 #include "scanstop_slam/request_check.h"
@@ -34,6 +35,8 @@ class IcpSlamNode {
       known.push_back(name);
       ros_params::optional(pnh, name, value);
     };
+    double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
+    optional("master_timeout", master_timeout);
     std::string mode = "3dof";
     optional("mode", mode);
     requireMode(pnh, mode);
@@ -124,9 +127,13 @@ class IcpSlamNode {
                         pnh.resolveName("odom_frame") + "' = '" + odom_frame_ + "' and '" +
                         pnh.resolveName("base_frame") + "' = '" + base_frame_ + "' must be three different frames");
     slam_ = std::make_unique<IcpSlam>(config, map_dir);
-    for (const SkippedScan& s : slam_->skippedScans())
-      ROS_ERROR("icp_slam_node: map directory problem, skipped: %s",
-                (s.reason.compare(0, s.file.size(), s.file) == 0 ? s.reason : s.file + ": " + s.reason).c_str());
+    for (const SkippedScan& s : slam_->skippedScans()) {
+      const std::string what = s.reason.compare(0, s.file.size(), s.file) == 0 ? s.reason : s.file + ": " + s.reason;
+      if (what.find("restored from poses_journal.csv") != std::string::npos)  // the scan ledger kept it: loaded
+        ROS_WARN("icp_slam_node: map directory problem, repaired: %s", what.c_str());
+      else
+        ROS_ERROR("icp_slam_node: map directory problem, skipped: %s", what.c_str());
+    }
     if (slam_->scanCount() > 0)
       ROS_INFO("icp_slam_node: resumed the map in %s with %zu scans (%zu skipped, %zu map points)", map_dir.c_str(),
                slam_->scanCount(), slam_->skippedScans().size(), slam_->map().size());
@@ -320,8 +327,14 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "icp_slam_node");
   ros::NodeHandle nh, pnh("~");
   try {
+    double master_timeout = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
     scanstop::slam::IcpSlamNode node(nh, pnh);
+    // The ROS master gone: ERROR once; gone longer than master_timeout (or a new master): end
+    // (the map directory is on disk after every scan: a restarted node reloads it).
+    scanstop::RosMasterWatchdog watchdog("icp_slam_node", master_timeout);
     ros::spin();
+    if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {
     ROS_FATAL("icp_slam_node: %s", e.what());
     return 1;

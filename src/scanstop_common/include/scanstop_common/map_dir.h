@@ -7,6 +7,10 @@
 ///   <dir>/scans/scan_NNNN.pcd  the scan's finite points in the base_link frame at scan time [m]
 ///   <dir>/pose_history.csv     (after a global relaxation moved poses: updatePoses) every map pose
 ///                              that was replaced, header "index,revision,map_x,map_y,map_yaw"
+///   <dir>/poses_journal.csv    append-only ledger of every poses.csv line ever written (same header
+///                              and columns; a later line of an index supersedes an earlier one),
+///                              fsync'd before poses.csv is rewritten. A scan whose poses.csv line is
+///                              missing or corrupt is restored from it on loading (issue #22 class 8).
 /// A scan's points in the map frame are map_pose.toIsometry3f() * p.
 
 #include <cstdint>
@@ -45,6 +49,12 @@ struct MapProblem {
 /// Loading validates each line of poses.csv and each scan file: a bad line or a missing, empty,
 /// truncated or corrupt scan file is reported in problems() and that scan is skipped; all other scans
 /// are kept. Nothing in a corrupt directory makes the loader throw or crash.
+/// The scan ledger: poses.csv and the scan files are kept in step through poses_journal.csv. Writers
+/// write the scan file, then its line to the journal, then poses.csv. On loading, an index whose
+/// poses.csv line is missing or did not parse but whose journal line names its scan file is restored
+/// from the journal (reported in problems() as "restored from poses_journal.csv"), so a corrupt
+/// poses.csv loses no scan and the next rewrite of poses.csv puts the line back. A scan file that no
+/// line of either file names is reported (an append interrupted before its line was written).
 class MapDirectory {
  public:
   /// Opens (creating it when missing) the directory; loads an existing poses.csv, skipping and
@@ -93,11 +103,19 @@ class MapDirectory {
 
   /// Absolute path of poses.csv.
   std::string posesPath() const { return dir_ + "/poses.csv"; }
+  /// Absolute path of poses_journal.csv (the ledger of every poses.csv line written).
+  std::string journalPath() const { return dir_ + "/poses_journal.csv"; }
+  /// The indices whose line was restored from the journal when the directory was loaded.
+  const std::vector<uint32_t>& restored() const { return restored_; }
 
  private:
   void load();
   void setNextIndex(uint32_t candidate);
   void writePoses() const;
+  /// Writes rows to the journal (fsync'd); creates it, seeded with every line of poses.csv, when missing.
+  void writeJournal(const std::vector<MapScanInfo>& rows) const;
+  /// Adds to `all` the indices poses.csv lost, from the journal (see the class comment).
+  void restoreFromJournal(std::vector<MapScanInfo>& all, long& largest);
   std::string dir_;
   std::vector<MapScanInfo> scans_;
   std::vector<MapScanInfo> skipped_;  ///< parsed lines whose scan file was bad (kept in poses.csv)
@@ -105,6 +123,7 @@ class MapDirectory {
   std::vector<std::string> named_files_;  ///< every scan file a line of poses.csv names
   uint32_t next_index_ = 0;
   uint32_t pose_revision_ = 0;
+  std::vector<uint32_t> restored_;
 };
 
 /// Transforms every point of a cloud (NaN stays NaN).

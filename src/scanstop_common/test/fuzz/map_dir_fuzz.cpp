@@ -28,6 +28,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   (void)initialized;
   if (size < 2) return 0;
   const size_t poses = std::min<size_t>(data[0] | (static_cast<size_t>(data[1]) << 8), size - 2);
+  // Each input is a map of its own: no journal of an earlier input's appends (it would restore their lines).
+  std::remove((dir + "/poses_journal.csv").c_str());
   scanstop::fuzz::writeBytes(dir + "/poses.csv", data + 2, poses);
   scanstop::fuzz::writeBytes(dir + "/scans/scan_0001.pcd", data + 2 + poses, size - 2 - poses);
   scanstop::MapDirectory map(dir);  // must not throw: poses.csv is a regular, readable file

@@ -102,6 +102,11 @@ class Mission {
   bool pause(std::string* why = nullptr);
   bool resume(std::string* why = nullptr);
   bool abort(std::string* why = nullptr);
+  /// Ends the mission for a reason outside it (the ROS master gone longer than master_timeout):
+  /// like abort, but run() ends Failed with `reason` (saved, so a restarted node resumes from there).
+  void end(const std::string& reason);
+  /// Records an event in the mission's log and state (a warning also becomes last_error).
+  void note(const std::string& what, bool warning = false) { event(what, warning); }
   bool paused() const;
 
   /// Called (outside the lock) after every state change, e.g. to publish the status at once.
@@ -154,6 +159,7 @@ class Mission {
   mutable std::mutex mutex_;
   std::condition_variable control_cv_;
   Control control_ = Control::Run;
+  std::string end_reason_;  ///< set by end(): why run() ends Failed
   MissionState state_;
   double elapsed_at_start_ = 0.0;
   std::chrono::steady_clock::time_point started_;

@@ -28,6 +28,16 @@ class MissionNode {
   MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
   ~MissionNode();
 
+  /// ~master_timeout [s]: how long the ROS master may be gone before the mission ends.
+  double masterTimeout() const { return master_timeout_s_; }
+  /// The master watchdog's handlers. Lost: the mission pauses (state kept and saved; the step that
+  /// was running ends as its service call does). Back: it resumes, unless the user had paused it.
+  /// End (gone longer than master_timeout, or a new master): the mission ends FAILED naming the
+  /// reason (state, report and summary written; restarting mission_node resumes it), then the node.
+  void onMasterLost(const std::string& why);
+  void onMasterBack(const std::string& why);
+  void onMasterEnd(const std::string& why);
+
  private:
   bool onStart(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
@@ -42,6 +52,8 @@ class MissionNode {
   ros::NodeHandle nh_;
   MissionConfig config_;
   bool shutdown_when_done_ = false;
+  double master_timeout_s_ = 30.0;
+  std::atomic<bool> paused_for_master_{false};  ///< the watchdog paused the mission (it resumes it)
   std::unique_ptr<RosRobotSystem> robot_;
   std::unique_ptr<Mission> mission_;
   std::thread runner_;

@@ -96,6 +96,11 @@ class PioneerDriver {
   /// Blocking motion primitives; never wait longer than the motion's timeout plus a margin.
   MotionResult rotate(double angle_rad);
   MotionResult forward(double distance_m);
+  /// Safety stop (the ROS master is gone: nobody supervises the robot): aborts a running motion
+  /// (its result says `reason`), ends teleoperation and, until allowMotion(), refuses new motions and
+  /// velocity commands with `reason`. The I/O thread sends STOP.
+  void halt(const std::string& reason);
+  void allowMotion();
 
   DriverStatus status() const;
   const DriverConfig& config() const { return config_; }
@@ -131,6 +136,8 @@ class PioneerDriver {
   std::unique_ptr<MotionController> motion_;  ///< owned by the I/O thread; presence mirrored in status_
   std::optional<MotionResult> result_;
   bool cancel_motion_ = false;
+  std::string cancel_reason_;  ///< what a cancelled motion's result says
+  std::string halted_;         ///< non-empty: halt() reason, motions refused
   double teleop_v_ = 0.0, teleop_w_ = 0.0, teleop_t_ = -1.0;
 
   // I/O-thread state.

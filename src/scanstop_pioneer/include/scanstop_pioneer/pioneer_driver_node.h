@@ -29,6 +29,10 @@ class PioneerDriverNode {
   static DriverConfig readParameters(const ros::NodeHandle& pnh);
   /// Private parameters set on the server that the node does not know (typos in a config file).
   static std::vector<std::string> unknownParameters(const ros::NodeHandle& pnh);
+  /// The master watchdog's handlers: stop the robot and refuse motions while the ROS master is gone
+  /// (nobody supervises the robot), accept them again when it is back.
+  void onMasterLost(const std::string& why);
+  void onMasterBack();
 
  private:
   void onSip(const DriverStatus& status);

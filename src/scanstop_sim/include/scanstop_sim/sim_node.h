@@ -31,6 +31,10 @@ class SimNode {
   /// Reads and validates the parameters, loads the world; throws ConfigError / IoError naming the
   /// parameter or file that is wrong.
   SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  /// The master watchdog's handlers: while the ROS master is gone, rotate/forward are refused with
+  /// the reason (a simulated motion is computed in one step; the one running ends as modelled).
+  void onMasterLost(const std::string& why);
+  void onMasterBack();
 
  private:
   bool onTakeScan(scanstop_msgs::TakeScan::Request& req, scanstop_msgs::TakeScan::Response& res);
@@ -59,6 +63,8 @@ class SimNode {
   std::unique_ptr<Simulator> sim_;
   std::mutex mutex_;
   std::atomic<bool> moving_{false};    ///< a rotate/forward motion is running
+  std::mutex master_mutex_;            ///< guards master_lost_ (mutex_ is held through a scan)
+  std::string master_lost_;            ///< non-empty while the ROS master is gone
   double motion_time_scale_ = 0.0;     ///< wall seconds per modelled second of motion (0: at once)
   double scan_time_scale_ = 0.0;       ///< wall seconds per modelled second of a scan (0: at once)
   std::string state_file_;             ///< where the simulation state is kept after every step ("" = nowhere)
