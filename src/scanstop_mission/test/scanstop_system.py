@@ -54,7 +54,7 @@ class System(object):
     """The nodes of one simulated exploration, logging into <run_dir>/<name>.out."""
 
     def __init__(self, run_dir, planes=50, budget=6, world="room_10x8", seed=7, error_profile="thesis",
-                 mission_args=(), sim_args=()):
+                 mission_args=(), sim_args=(), slam_args=()):
         self.run_dir = run_dir
         self.planes = planes
         self.budget = budget
@@ -63,6 +63,7 @@ class System(object):
         self.error_profile = error_profile
         self.mission_args = list(mission_args)
         self.sim_args = list(sim_args)
+        self.slam_args = list(slam_args)
         self.procs = {}
         self.starts = {}
 
@@ -72,7 +73,7 @@ class System(object):
             "sim": ["rosrun", "scanstop_sim", "sim_node", "__name:=sim_node", "_world:=%s" % world_file(self.world),
                     "_error_profile:=%s" % self.error_profile, "_seed:=%d" % self.seed,
                     "_state_file:=%s/sim_state.txt" % run] + self.sim_args,
-            "slam": ["rosrun", "scanstop_slam", "icp_slam_node", "__name:=icp_slam_node", "_map_dir:=%s/map" % run],
+            "slam": ["rosrun", "scanstop_slam", "icp_slam_node", "__name:=icp_slam_node", "_map_dir:=%s/map" % run] + self.slam_args,
             "explorer": ["rosrun", "scanstop_explorer", "explorer_node", "__name:=explorer_node",
                          "_map_dir:=%s/map" % run, "_run_dir:=%s/explorer" % run, "_k_r_m:=2.5"],
             "mesher": ["rosrun", "scanstop_mesher", "bpa_mesher_node", "__name:=bpa_mesher_node",

@@ -332,6 +332,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
       // The coarse stage only moves the start; its own checks use the coarse distance.
       IcpConfig coarse = config_.icp;
       coarse.c_max_m = config_.coarse_c_max_m;
+      if (config_.coarse_point_to_point) coarse.method = IcpMethod::point_to_point;
       coarse.t_c_m = std::max(coarse.t_c_m, 0.002);
       coarse.r_c_rad = std::max(coarse.r_c_rad, 0.1 * M_PI / 180.0);
       const IcpResult c = icp(map_, coarseSource(source), start, coarse, &origin);

@@ -64,6 +64,7 @@ class IcpSlamNode {
     optional("max_points_per_voxel", config.max_points_per_voxel);
     optional("map_spacing", config.map_spacing_m);
     optional("coarse_c_max", config.coarse_c_max_m);
+    optional("coarse_point_to_point", config.coarse_point_to_point);
     optional("refine_t_c", config.refine_t_c_m);
     double refine_r_c_deg = config.refine_r_c_rad * 180.0 / M_PI;
     optional("refine_r_c_deg", refine_r_c_deg);

@@ -28,6 +28,7 @@ constexpr const char* kUsage =
     "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof] [--skip-bad]\n"
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
     "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--odom-scale-min-travel M]\n"
+    "                  [--coarse-point-to-plane]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
@@ -101,6 +102,7 @@ int main(int argc, char** argv) {
       .real("--degeneracy-ratio", config.icp.degeneracy_ratio, 0.0, 1.0)
       .flag("--no-remap", config.icp.degeneracy_remap, false)
       .flag("--no-odom-scale", config.odom_scale_estimation, false)
+      .flag("--coarse-point-to-plane", config.coarse_point_to_point, false)
       .real("--odom-scale-min-travel", config.odom_scale_min_travel_m, 0.01, 100.0)
       .flag("--skip-bad", skip_bad)
       .real("--c-max", config.icp.c_max_m, 0.001, 5.0)
