@@ -125,6 +125,8 @@ TEST(PlanStep, RefusesAMapWithAMissingScanOrANaNPoseNamingItUnlessSkipBad) {
 
   const std::string map2 = makeMap(dir + "/map2", {Pose2D(1.0, 1.0, 0.0), Pose2D(1.5, 1.0, 0.0)});
   edit(map2 + "/poses.csv", "\n1,scans/scan_0001.pcd,0,1.5,", "\n1,scans/scan_0001.pcd,0,nan,");
+  // poses.csv alone: the scan ledger's journal would restore the line (and name that instead).
+  ASSERT_EQ(std::remove((map2 + "/poses_journal.csv").c_str()), 0);
   r = run(std::string(PLAN_STEP_EXE) + " " + map2 + " " + dir + "/out2");
   EXPECT_EQ(r.status, 2) << r.out;
   EXPECT_NE(r.out.find(map2 + "/poses.csv: line 3: column 4 ('nan') is not a finite number (1 problem"), std::string::npos)
