@@ -585,15 +585,22 @@ class Correspondences {
     return false;
   }
   /// Same side (IcpConfig::same_side): where the map point's voxel is one plane and both points'
-  /// viewing directions are known and clear of it (more than ~6 deg), they must lie on the same side.
+  /// viewing directions are known, they must have been seen from the same side of it, each clear of
+  /// the plane (more than ~6 deg). A point seen along the plane has no side: paired with a point
+  /// seen clearly it may be the other face of a thin wall. room_10x8 seed 7: the robot in the door,
+  /// 11 cm from the corridor's face of the 10 cm wall, saw that face at grazing angles; its points
+  /// paired with the room's face and held the scan 6.2 cm into the room, registered alone against
+  /// the earlier scans at their true poses; 0.2 cm when such pairs are no pairs (docs/decisions.md).
   static bool sameSide(const Eigen::Vector3f& q, const Eigen::Vector3f& origin, const Surface& s) {
     if (!s.planar) return true;
     const float map_side = s.normal.dot(s.view);
     const Eigen::Vector3f to_sensor = origin - q;
     const float n = to_sensor.norm();
-    if (!(n > 0.0f)) return true;
+    if (!(n > 0.0f) || s.view.squaredNorm() == 0.0f) return true;  // a view unknown: no test
     const float source_side = s.normal.dot(to_sensor) / n;
     constexpr float kClear = 0.1f;
+    const bool map_clear = std::abs(map_side) > kClear, source_clear = std::abs(source_side) > kClear;
+    if (map_clear != source_clear) return false;
     return !((map_side > kClear && source_side < -kClear) || (map_side < -kClear && source_side > kClear));
   }
   /// The nearest map point within c_max that may pair with point i (at q; origin: the source's

@@ -137,21 +137,49 @@ std::vector<ScanPose> IcpSlam::poses() const {
 }
 
 IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source,
-                                  const Eigen::Isometry3d& start, const Eigen::Vector3f& origin) const {
+                                  const Eigen::Isometry3d& start, const Eigen::Vector3f& origin, Registration* r) const {
   Eigen::Isometry3d from = start;
   int coarse_iterations = 0;
   if (config_.coarse_c_max_m > config_.icp.c_max_m) {
+    // The coarse stage only moves the start; its own checks use the coarse distance.
     IcpConfig coarse = config_.icp;
     coarse.c_max_m = config_.coarse_c_max_m;
+    if (config_.coarse_point_to_point) coarse.method = IcpMethod::point_to_point;
     coarse.t_c_m = std::max(coarse.t_c_m, 0.002);
     coarse.r_c_rad = std::max(coarse.r_c_rad, 0.1 * M_PI / 180.0);
-    const IcpResult c = icp(target, source, from, coarse, &origin);
+    const IcpResult c = icp(target, coarseSource(source), from, coarse, &origin);
     coarse_iterations = c.iterations;
     if (c.converged) from = c.T_target_source;
   }
   IcpResult result = icp(target, source, from, config_.icp, &origin);
   result.iterations += coarse_iterations;
+  if (result.converged && config_.refine_t_c_m > 0.0) {
+    IcpConfig refine = config_.icp;
+    refine.unique_matches = true;
+    refine.t_c_m = config_.refine_t_c_m;
+    refine.r_c_rad = config_.refine_r_c_rad;
+    refine.max_iterations = config_.refine_max_iterations;
+    IcpResult refined = icp(target, refineSource(source), result.T_target_source, refine, &origin);
+    // Not settled within its iterations, or moved farther than a bias can be: the thesis stage's
+    // result stands.
+    const Eigen::Isometry3d moved = result.T_target_source.inverse() * refined.T_target_source;
+    const double moved_m = moved.translation().norm(), moved_rad = Eigen::AngleAxisd(moved.linear()).angle();
+    const bool rejected =
+        refined.converged && (moved_m > config_.refine_max_correction_m || moved_rad > config_.refine_max_correction_rad);
+    if (r) {
+      r->refine_moved_m = moved_m;
+      r->refine_moved_rad = moved_rad;
+      r->refine_rejected = rejected;
+    }
+    if (refined.converged && !rejected) {
+      refined.iterations += result.iterations;
+      result = refined;
+    } else {
+      result.iterations += refined.iterations;
+    }
+  }
   if (result.converged) {
+    // The bound on the correction applies to the whole correction of the initial guess.
     const Eigen::Isometry3d correction = start.inverse() * result.T_target_source;
     if (correction.translation().norm() > config_.icp.max_correction_m ||
         Eigen::AngleAxisd(correction.linear()).angle() > config_.icp.max_correction_rad) {
@@ -161,6 +189,33 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
     }
   }
   return result;
+}
+
+void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, const Eigen::Vector3f& origin,
+                           Registration& r) const {
+  const IcpResult icp_result =
+      registerStages(target, sample(scan_base.points, config_.source_voxel_m), r.guess.toIsometry3d(), origin, &r);
+  r.converged = icp_result.converged;
+  r.failure = icp_result.failure;
+  r.iterations = icp_result.iterations;
+  r.correspondences = icp_result.correspondences;
+  r.rms_m = icp_result.rms_m;
+  r.overlap = icp_result.overlap;
+  r.condition = icp_result.condition;
+  r.degenerate = icp_result.degenerate;
+  r.weak_direction = icp_result.weak_direction;
+  r.remapped = icp_result.remapped;
+  r.map_pose = r.converged ? Pose2D::fromIsometry3d(icp_result.T_target_source) : r.guess;
+}
+
+Registration IcpSlam::registerAgainst(const VoxelMap& target, const PointCloud& scan_base, const Pose2D& guess,
+                                      const Eigen::Vector3d& sensor_origin) const {
+  Registration r;
+  r.guess = guess;
+  const auto start = std::chrono::steady_clock::now();
+  registerInto(target, scan_base, sensor_origin.cast<float>(), r);
+  r.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
 }
 
 void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>& points,
@@ -192,7 +247,7 @@ void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>
     VoxelMap target(config_.icp.c_max_m, config_.max_points_per_voxel, config_.map_spacing_m);
     target.add(kept_[i].points, &kept_[i].origin);
     const Pose2D guess = graph.poses()[i].between(pj);
-    const IcpResult pair = registerStages(target, points, guess.toIsometry3d(), origin);
+    const IcpResult pair = registerStages(target, points, guess.toIsometry3d(), origin, nullptr);
     if (!pair.converged || pair.overlap < config_.relax_min_overlap || pair.rms_m > config_.relax_max_rms_m) continue;
     PoseGraphEdge e;
     e.from = i;
@@ -320,72 +375,12 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     delta.y *= r.odom_scale;
     r.guess = last_map_ * delta;
   }
-  const std::vector<Eigen::Vector3f> source = sample(scan_base.points, config_.source_voxel_m);
   const Eigen::Vector3f origin = sensor_origin.cast<float>();
   if (map_.size() == 0) {  // the first scan (or every earlier one was skipped) defines the map
     r.map_pose = r.guess;
     r.converged = true;
   } else {
-    Eigen::Isometry3d start = r.guess.toIsometry3d();
-    int coarse_iterations = 0;
-    if (config_.coarse_c_max_m > config_.icp.c_max_m) {
-      // The coarse stage only moves the start; its own checks use the coarse distance.
-      IcpConfig coarse = config_.icp;
-      coarse.c_max_m = config_.coarse_c_max_m;
-      if (config_.coarse_point_to_point) coarse.method = IcpMethod::point_to_point;
-      coarse.t_c_m = std::max(coarse.t_c_m, 0.002);
-      coarse.r_c_rad = std::max(coarse.r_c_rad, 0.1 * M_PI / 180.0);
-      const IcpResult c = icp(map_, coarseSource(source), start, coarse, &origin);
-      coarse_iterations = c.iterations;
-      if (c.converged) start = c.T_target_source;
-    }
-    IcpResult icp_result = icp(map_, source, start, config_.icp, &origin);
-    icp_result.iterations += coarse_iterations;
-    if (icp_result.converged && config_.refine_t_c_m > 0.0) {
-      IcpConfig refine = config_.icp;
-      refine.unique_matches = true;
-      refine.t_c_m = config_.refine_t_c_m;
-      refine.r_c_rad = config_.refine_r_c_rad;
-      refine.max_iterations = config_.refine_max_iterations;
-      IcpResult refined = icp(map_, refineSource(source), icp_result.T_target_source, refine, &origin);
-      // Not settled within its iterations, or moved farther than a bias can be: the thesis stage's
-      // result stands.
-      const Eigen::Isometry3d moved = icp_result.T_target_source.inverse() * refined.T_target_source;
-      r.refine_moved_m = moved.translation().norm();
-      r.refine_moved_rad = Eigen::AngleAxisd(moved.linear()).angle();
-      if (refined.converged &&
-          (r.refine_moved_m > config_.refine_max_correction_m || r.refine_moved_rad > config_.refine_max_correction_rad)) {
-        r.refine_rejected = true;
-        refined.converged = false;
-      }
-      if (refined.converged) {
-        refined.iterations += icp_result.iterations;
-        icp_result = refined;
-      } else {
-        icp_result.iterations += refined.iterations;
-      }
-    }
-    if (icp_result.converged) {
-      // The bound on the correction applies to the whole correction of the odometry guess.
-      const Eigen::Isometry3d correction = r.guess.toIsometry3d().inverse() * icp_result.T_target_source;
-      if (correction.translation().norm() > config_.icp.max_correction_m ||
-          Eigen::AngleAxisd(correction.linear()).angle() > config_.icp.max_correction_rad) {
-        icp_result.converged = false;
-        icp_result.failure = "the correction of the odometry guess (" + std::to_string(correction.translation().norm()) +
-                             " m) exceeds max_correction";
-      }
-    }
-    r.converged = icp_result.converged;
-    r.failure = icp_result.failure;
-    r.iterations = icp_result.iterations;
-    r.correspondences = icp_result.correspondences;
-    r.rms_m = icp_result.rms_m;
-    r.overlap = icp_result.overlap;
-    r.condition = icp_result.condition;
-    r.degenerate = icp_result.degenerate;
-    r.weak_direction = icp_result.weak_direction;
-    r.remapped = icp_result.remapped;
-    r.map_pose = r.converged ? Pose2D::fromIsometry3d(icp_result.T_target_source) : r.guess;
+    registerInto(map_, scan_base, origin, r);
   }
   // Global relaxation: on a copy of the graph, so a scan that cannot be stored changes nothing.
   PoseGraph graph = graph_;

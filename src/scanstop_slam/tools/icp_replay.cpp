@@ -28,7 +28,7 @@ constexpr const char* kUsage =
     "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof] [--skip-bad]\n"
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
     "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--odom-scale-min-travel M]\n"
-    "                  [--coarse-point-to-plane]\n"
+    "                  [--coarse-point-to-plane] [--isolated odometry|truth]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
@@ -37,6 +37,10 @@ constexpr const char* kUsage =
     "                  [--relax] [--relax-neighbours N] [--relax-loop-candidates N] [--relax-loop-min-gap N]\n"
     "                  [--relax-max-distance M] [--relax-voxel M] [--relax-min-overlap F] [--relax-max-rms M]\n"
     "                  [--relax-update M] [--relax-update-deg D] [--relax-loss cauchy|huber|none] [--relax-loss-scale S]\n"
+    "  --isolated: (with --truth) register every scan alone against the earlier scans at their true\n"
+    "              poses, from the true pose of the scan before composed with the odometry leg\n"
+    "              (odometry) or from its own true pose (truth), and print each registration's error:\n"
+    "              the error of one registration, without the drift before it\n"
     "  --skip-bad: replay the good scans of a map with bad lines or scan files (each named on stderr);\n"
     "              default: refuse such a map, naming the first problem\n"
     "  numbers are checked against the ranges of the SLAM configuration (an error names option, value and range)\n"
@@ -83,10 +87,63 @@ std::vector<std::optional<Pose2D>> readTruth(const std::string& path) {
 double posErr(const Pose2D& a, const Pose2D& b) { return std::hypot(a.x - b.x, a.y - b.y); }
 double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAngle(a.yaw - b.yaw)) * 180.0 / M_PI; }
 
+/// --isolated: every scan registered alone against the earlier scans at their true poses.
+int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2D>>& truth, const slam::SlamConfig& config,
+                   bool from_truth, size_t max_scans, bool quiet) {
+  const slam::IcpSlam slam(config);
+  slam::VoxelMap map(config.icp.c_max_m, config.max_points_per_voxel, config.map_spacing_m);
+  const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
+  double sum2 = 0.0, max = 0.0, sum2_yaw = 0.0, max_yaw = 0.0, total_s = 0.0;
+  size_t m = 0, failed = 0, max_at = 0;
+  std::optional<size_t> prev;  // position of the last scan with a true pose
+  for (size_t i = 0; i < n; ++i) {
+    const MapScanInfo& info = in.scans()[i];
+    const std::optional<Pose2D> t = info.index < truth.size() ? truth[info.index] : std::nullopt;
+    if (!t) continue;
+    const PointCloud scan = in.loadScan(i);
+    if (prev) {
+      const MapScanInfo& before = in.scans()[*prev];
+      const Pose2D guess = from_truth ? *t : *truth[before.index] * before.odom_pose.between(info.odom_pose);
+      const slam::Registration r = slam.registerAgainst(map, scan, guess, info.sensor_origin);
+      total_s += r.time_s;
+      const double e = posErr(r.map_pose, *t), y = yawErrDeg(r.map_pose, *t);
+      if (!quiet)
+        std::printf("scan %3zu: %s err %5.1f cm (dx %5.1f dy %5.1f) %5.2f deg, guess off %5.1f cm, it %3d, overlap %.2f, "
+                    "condition %.2f%s\n",
+                    i, r.converged ? "ok    " : "FAILED", e * 100, (r.map_pose.x - t->x) * 100, (r.map_pose.y - t->y) * 100, y,
+                    posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.degenerate ? " degenerate" : "");
+      failed += r.converged ? 0 : 1;
+      sum2 += e * e;
+      sum2_yaw += y * y;
+      if (e > max) max_at = i;
+      max = std::max(max, e);
+      max_yaw = std::max(max_yaw, y);
+      ++m;
+    }
+    const Eigen::Isometry3f T = t->toIsometry3f();
+    std::vector<Eigen::Vector3f> in_map;
+    in_map.reserve(scan.points.size());
+    for (const auto& p : scan.points)
+      if (p.allFinite()) in_map.push_back(T * p);
+    const Eigen::Vector3f origin = T * info.sensor_origin.cast<float>();
+    map.add(in_map, &origin);
+    prev = i;
+  }
+  if (m == 0) {
+    std::printf("isolated: no registration (fewer than two scans with a true pose)\n");
+    return 0;
+  }
+  std::printf("isolated registrations from %s over %zu scans: position RMS %6.2f cm max %6.2f cm (scan %zu); yaw RMS %5.3f deg "
+              "max %5.3f deg; %zu failed; %.2f s per scan\n",
+              from_truth ? "the true pose" : "the odometry leg", m, std::sqrt(sum2 / m) * 100, max * 100, max_at,
+              std::sqrt(sum2_yaw / m), max_yaw, failed, total_s / m);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string map_dir, out_dir, truth_path, mode = "3dof", method = slam::toString(slam::SlamConfig().icp.method);
+  std::string map_dir, out_dir, truth_path, isolated, mode = "3dof", method = slam::toString(slam::SlamConfig().icp.method);
   bool quiet = false, skip_bad = false;
   size_t max_scans = 0;
   slam::SlamConfig config;
@@ -95,6 +152,7 @@ int main(int argc, char** argv) {
   opts.positional("MAP_DIR", map_dir)
       .text("--out", out_dir)
       .text("--truth", truth_path)
+      .choice("--isolated", isolated, {"odometry", "truth"})
       .choice("--mode", mode, {"3dof", "6dof"})
       .choice("--method", method, {"point_to_point", "point_to_plane"})
       .flag("--source-centroids", config.source_centroids)
@@ -149,6 +207,13 @@ int main(int argc, char** argv) {
         openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "icp_replay: warning: " << w << "\n"; });
     std::vector<std::optional<Pose2D>> truth;
     if (!truth_path.empty()) truth = readTruth(truth_path);
+    if (!isolated.empty()) {
+      if (truth.empty()) {
+        std::cerr << "icp_replay: --isolated needs --truth (the true poses to build the map from)\n";
+        return kExitUsage;
+      }
+      return replayIsolated(in, truth, config, isolated == "truth", max_scans, quiet);
+    }
     slam::IcpSlam slam(config, out_dir);
     if (slam.scanCount() != 0) throw IoError(out_dir, "already holds scans; give an empty or new --out directory");
     std::vector<Pose2D> poses;

@@ -219,6 +219,12 @@ class IcpSlam {
   /// The pose graph of the relaxation: one node per scan of poses(), in that order (edges only with relax).
   const PoseGraph& graph() const { return graph_; }
 
+  /// Registers a scan (base_link) against another map (e.g. earlier scans at their true poses, for
+  /// measuring one registration alone) from guess, with this SLAM's stages and checks exactly as
+  /// registerScan registers against its own map; changes nothing. index and odom_scale stay unset.
+  Registration registerAgainst(const VoxelMap& target, const PointCloud& scan_base, const Pose2D& guess,
+                               const Eigen::Vector3d& sensor_origin) const;
+
   /// Scans in the map including skipped ones: the index the next scan gets.
   size_t scanCount() const { return count_; }
   const VoxelMap& map() const { return map_; }
@@ -240,9 +246,13 @@ class IcpSlam {
   std::vector<Eigen::Vector3f> sample(const std::vector<Eigen::Vector3f>& points, double voxel_m) const;
   std::vector<Eigen::Vector3f> coarseSource(const std::vector<Eigen::Vector3f>& source) const;
   std::vector<Eigen::Vector3f> refineSource(const std::vector<Eigen::Vector3f>& source) const;
-  /// Coarse stage (coarse_c_max) then the thesis stage, from start; the correction bound applies.
+  /// The stages of every registration, from start: coarse (coarse_c_max), the thesis stage, the
+  /// refinement (its figures into r when given); the correction bound applies to the whole move.
   IcpResult registerStages(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source,
-                           const Eigen::Isometry3d& start, const Eigen::Vector3f& origin) const;
+                           const Eigen::Isometry3d& start, const Eigen::Vector3f& origin, Registration* r) const;
+  /// registerStages on the scan's source subset from r.guess; fills r's registration figures and map_pose.
+  void registerInto(const VoxelMap& target, const PointCloud& scan_base, const Eigen::Vector3f& origin,
+                    Registration& r) const;
   /// Pairwise edges from the new scan (kept points, pose guess) to earlier scans, into graph.
   void addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin,
                      Registration& r) const;
