@@ -4,7 +4,7 @@
 # (PLANES planes, MAX_SCANS scans), then plays run_dir/mission.bag into icp_slam_node with
 # src/scanstop_slam/launch/replay.launch and compares the rebuilt map directory with the run's:
 # the same number of scans, every scan pose within TOL_M metres and TOL_DEG degrees, and the same
-# number of points per scan.
+# number of points per scan. Also: the mission left report.html and its plots (make_report.py).
 # Usage: bash scripts/check_mission_replay.sh [WORK_DIR]   (after sourcing a devel space; exit 0 = pass)
 set -uo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -35,6 +35,13 @@ PY
 then
   echo "check_mission_replay: summary.json has no plausible true_coverage (room_10x8: 96 m2 of reachable floor)"; exit 1
 fi
+# The mission ends with make_report.py (html_report): report.html, its plots and the explorer's
+# georeferenced floor map they draw on, linked from report.md.
+for f in report.html report_coverage.png report_trajectory.png report_pose_error.png explorer/floor_map.yaml; do
+  [[ -s "$run/$f" ]] || { echo "check_mission_replay: no $run/$f"; cat "$run/make_report.log" 2>/dev/null; exit 1; }
+done
+grep -q "(report.html)" "$run/report.md" || { echo "check_mission_replay: report.md does not link report.html"; exit 1; }
+echo "check_mission_replay: report.html and its plots are there"
 # rosbag record closes the bag on SIGINT; the launch ends when the mission does.
 for _ in $(seq 30); do [[ -f "$run/mission.bag" ]] && break; sleep 1; done
 [[ -f "$run/mission.bag" ]] || { echo "check_mission_replay: no $run/mission.bag"; ls -la "$run"; exit 1; }

@@ -72,8 +72,8 @@ print("map              %s/map (poses.csv, scans/*.pcd)" % run_dir)
 for f in ("mesh.ply", "mesh.stl"):
     if os.path.exists(os.path.join(run_dir, f)):
         print("mesh             %s/%s" % (run_dir, f))
-print("images           %s/explorer (per step), coverage.png, trajectory.png" % run_dir)
-print("report           %s/report.md, summary.json" % run_dir)
+print("images           %s/explorer (per step), report_coverage.png, report_trajectory.png, report_pose_error.png" % run_dir)
+print("report           %s/report.html, report.md, summary.json" % run_dir)
 print("view it          roslaunch launch/view_run.launch run_dir:=%s" % run_dir)
 sys.exit(0 if s["state"] == "DONE" else 1)
 PY

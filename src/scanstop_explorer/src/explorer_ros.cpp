@@ -370,6 +370,10 @@ void ExplorerNode::writeImages(const PlanResult& r) {
     writePlanImages(r, node_config_.run_dir, prefix, node_config_.image_scale);
     writeFileAtomic(node_config_.run_dir + "/" + prefix + "plan.json", planToJson(r) + "\n");
     writeFileAtomic(node_config_.run_dir + "/" + prefix + "path.csv", pathToCsv(r));
+    if (!r.states.empty()) {  // the latest floor grid, georeferenced (the run report's background)
+      writeFileAtomic(node_config_.run_dir + "/floor_map.png", floorMapPng(r));
+      writeFileAtomic(node_config_.run_dir + "/floor_map.yaml", floorMapYaml(r, "floor_map.png"));
+    }
   } catch (const std::exception& e) {
     ROS_ERROR("explorer_node: cannot write the step images: %s", e.what());
   }

@@ -1,5 +1,6 @@
 #include "scanstop_explorer/render.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -56,6 +57,78 @@ std::string quote(const std::string& text) {
   return out + "\"";
 }
 
+/// One legend entry: a colour swatch (filled square, dot or line) and its label.
+struct LegendItem {
+  cv::Scalar color;
+  std::string label;
+  enum Shape { kSquare, kDot, kLine, kRing } shape = kSquare;
+};
+
+/// Appends a white footer below `map` (which keeps its pixels and rows 0..map.rows-1): a scale bar
+/// for `px_per_m` and the legend entries, wrapped to the image width.
+cv::Mat withLegend(const cv::Mat& map, double px_per_m, const std::vector<LegendItem>& items) {
+  const int font = cv::FONT_HERSHEY_SIMPLEX, line_h = 14, pad = 4;
+  const double font_scale = 0.35;
+  const auto textWidth = [&](const std::string& t) {
+    int base = 0;
+    return cv::getTextSize(t, font, font_scale, 1, &base).width;
+  };
+  // The scale bar: the longest of 0.1, 0.2, 0.5, 1, 2, 5, ... m that fits in a third of the width.
+  double bar_m = 0.1;
+  for (double m : {0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0})
+    if (m * px_per_m <= map.cols / 3.0) bar_m = m;
+  const int bar_px = std::max(1, static_cast<int>(std::lround(bar_m * px_per_m)));
+  std::ostringstream bar_label;
+  bar_label << bar_m << " m";
+  // Lay the entries out left to right, wrapping; row 0 holds the scale bar first.
+  struct Placed {
+    int row, x;
+  };
+  std::vector<Placed> placed;
+  int row = 0, x = pad + bar_px + 6 + textWidth(bar_label.str()) + 12;
+  for (const LegendItem& it : items) {
+    const int w = 12 + 3 + textWidth(it.label) + 10;
+    if (x + w > map.cols - pad && x > pad) {
+      ++row;
+      x = pad;
+    }
+    placed.push_back({row, x});
+    x += w;
+  }
+  const int footer = 2 * pad + (row + 1) * line_h;
+  cv::Mat out(map.rows + footer, map.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+  map.copyTo(out(cv::Rect(0, 0, map.cols, map.rows)));
+  const auto baseline = [&](int r) { return map.rows + pad + r * line_h + 10; };
+  // Scale bar with end ticks.
+  const int by = baseline(0) - 3;
+  cv::line(out, {pad, by}, {pad + bar_px, by}, cv::Scalar(0, 0, 0), 2);
+  cv::line(out, {pad, by - 4}, {pad, by + 2}, cv::Scalar(0, 0, 0), 1);
+  cv::line(out, {pad + bar_px, by - 4}, {pad + bar_px, by + 2}, cv::Scalar(0, 0, 0), 1);
+  cv::putText(out, bar_label.str(), {pad + bar_px + 6, baseline(0)}, font, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  for (size_t i = 0; i < items.size(); ++i) {
+    const LegendItem& it = items[i];
+    const int x0 = placed[i].x, y = baseline(placed[i].row);
+    const cv::Rect sw(x0, y - 9, 11, 11);
+    switch (it.shape) {
+      case LegendItem::kSquare:
+        cv::rectangle(out, sw, it.color, cv::FILLED);
+        cv::rectangle(out, sw, cv::Scalar(90, 90, 90), 1);
+        break;
+      case LegendItem::kDot:
+        cv::circle(out, {x0 + 5, y - 4}, 3, it.color, cv::FILLED, cv::LINE_AA);
+        break;
+      case LegendItem::kLine:
+        cv::line(out, {x0, y - 4}, {x0 + 11, y - 4}, it.color, 2);
+        break;
+      case LegendItem::kRing:
+        cv::circle(out, {x0 + 5, y - 4}, 4, it.color, 1, cv::LINE_AA);
+        break;
+    }
+    cv::putText(out, it.label, {x0 + 15, y}, font, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& res, int scale) {
@@ -103,6 +176,27 @@ std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& 
                std::max(1, scale / 2));
     cv::line(img, px(robot), px(head), cv::Scalar(0, 200, 0), std::max(1, scale / 2));
     cv::flip(img, img, 0);  // row 0 is the lowest y: put north up
+    // The legend: what this layer's colours mean, then what every layer has drawn in.
+    std::vector<LegendItem> items;
+    if (name == "floor") {
+      items = {{cv::Scalar(128, 128, 128), "floor"},
+               {cv::Scalar(0, 0, 220), "obstacle"},
+               {cv::Scalar(0, 0, 0), "unknown"}};
+      if (!res.open.empty()) items.push_back({cv::Scalar(0, 160, 255), "open cell"});
+    } else if (name == "distance") {
+      items = {{cv::Scalar(200, 200, 200), "brighter: farther from obstacles"},
+               {cv::Scalar(255, 120, 0), "skeleton"},
+               {cv::Scalar(0, 255, 255), "anchor"}};
+    } else {
+      const char* what = name == "cost" ? "brighter: farther to go" : name == "knowledge" ? "brighter: better known"
+                                                                                         : "brighter: better target";
+      items = {{cv::Scalar(200, 200, 200), what}};
+    }
+    items.push_back({cv::Scalar(0, 200, 0), "robot", LegendItem::kRing});
+    items.push_back({cv::Scalar(0, 0, 255), "landmark", LegendItem::kDot});
+    items.push_back({cv::Scalar(255, 255, 0), "path", LegendItem::kLine});
+    items.push_back({cv::Scalar(255, 0, 255), "target", LegendItem::kRing});
+    img = withLegend(img, scale / g.resolution, items);
   }
   return out;
 }
@@ -118,6 +212,29 @@ void writePlanImages(const PlanResult& result, const std::string& dir, const std
     }
     if (!ok) throw IoError(path, "cannot write PNG (does the directory exist and is it writable?)");
   }
+}
+
+std::string floorMapPng(const PlanResult& r) {
+  // map_server's trinary convention: free 254, occupied 0, unknown 205; row 0 is the highest y.
+  cv::Mat img(r.states.size(), CV_8UC1, cv::Scalar(205));
+  img.setTo(cv::Scalar(254), r.states == kFloor);
+  img.setTo(cv::Scalar(0), r.states == kObstacle);
+  cv::flip(img, img, 0);
+  std::vector<uchar> buffer;
+  if (!cv::imencode(".png", img, buffer)) throw IoError("floor map", "PNG encoding failed");
+  return std::string(buffer.begin(), buffer.end());
+}
+
+std::string floorMapYaml(const PlanResult& r, const std::string& image) {
+  std::ostringstream s;
+  s.precision(10);
+  s << "# The explorer's floor grid (map_server format): floor 254, obstacle 0, unknown 205, north up.\n"
+    << "image: " << image << "\n"
+    << "resolution: " << r.geometry.resolution << "\n"
+    << "origin: [" << r.geometry.origin_x << ", " << r.geometry.origin_y << ", 0.0]\n"
+    << "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    << "width: " << r.geometry.width << "\nheight: " << r.geometry.height << "\n";
+  return s.str();
 }
 
 std::string planToJson(const PlanResult& r) {

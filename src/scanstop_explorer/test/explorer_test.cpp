@@ -387,14 +387,28 @@ TEST(Render, ImagesJsonAndOccupancy) {
   for (size_t i = 0; i < 5; ++i) {
     EXPECT_EQ(images[i].first, names[i]);
     EXPECT_EQ(images[i].second.cols, 2 * r.geometry.width);
-    EXPECT_EQ(images[i].second.rows, 2 * r.geometry.height);
+    // The map, then a white footer with the scale bar and the legend.
+    EXPECT_GT(images[i].second.rows, 2 * r.geometry.height);
+    EXPECT_EQ(images[i].second.at<cv::Vec3b>(images[i].second.rows - 1, images[i].second.cols - 1),
+              cv::Vec3b(255, 255, 255));
   }
   // North up: the robot (green) is drawn near the bottom-left, where (1, 1) is.
   const cv::Mat& fl = images[0].second;
   const Eigen::Vector2d q = r.geometry.toGrid({1.0, 1.0}) * 2;
   const cv::Point rp(static_cast<int>(std::lround(q.x())), static_cast<int>(std::lround(q.y())));
-  const cv::Vec3b px = fl.at<cv::Vec3b>(fl.rows - 1 - rp.y, rp.x - static_cast<int>(0.2 / 0.05 * 2));
+  const cv::Vec3b px = fl.at<cv::Vec3b>(2 * r.geometry.height - 1 - rp.y, rp.x - static_cast<int>(0.2 / 0.05 * 2));
   EXPECT_EQ(px, cv::Vec3b(0, 200, 0));
+  // The georeferenced floor map: one pixel per cell, north up, map_server's grey levels.
+  const std::string png = floorMapPng(r);
+  const cv::Mat fm = cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(fm.cols, r.geometry.width);
+  ASSERT_EQ(fm.rows, r.geometry.height);
+  const cv::Point cell = r.geometry.cellOf(1.0, 1.0);
+  EXPECT_EQ(fm.at<uint8_t>(r.geometry.height - 1 - cell.y, cell.x), 254);  // the robot stands on floor
+  const std::string yaml = floorMapYaml(r, "floor_map.png");
+  EXPECT_NE(yaml.find("image: floor_map.png"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("resolution: 0.05"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("origin: ["), std::string::npos) << yaml;
   const std::string dir = tempDir();
   writePlanImages(r, dir, "step_000_", 2);
   for (const char* n : names) EXPECT_FALSE(cv::imread(dir + "/step_000_" + n + ".png").empty()) << n;

@@ -138,6 +138,15 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   bool autostart = true;
   ros_params::optional(pnh, "autostart", autostart);
   ros_params::optional(pnh, "shutdown_when_done", shutdown_when_done_);
+  ros_params::optional(pnh, "html_report", html_report_);
+  ros_params::optional(pnh, "report_script", report_script_);
+  if (html_report_ && report_script_.empty()) {
+    // catkin_install_python puts make_report.py beside mission_node (devel and install space).
+    char exe[4096];
+    const ssize_t n = ::readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+    const std::string self = n > 0 ? std::string(exe, static_cast<size_t>(n)) : std::string();
+    report_script_ = self.substr(0, self.find_last_of('/') + 1) + "make_report.py";
+  }
   ros_params::optional(pnh, "master_timeout", master_timeout_s_);
   // A misspelt parameter would silently keep its default: refuse it.
   const std::vector<std::string> unknown = ros_params::unknownParameters(
@@ -284,7 +293,8 @@ void MissionNode::runMission() {
   const MissionState state = mission_->snapshot();
   try {
     const std::optional<TrueCoverage> truth = trueCoverage();
-    const std::string report = writeReport(state, config_.run_dir, listImages(config_.run_dir, "explorer"), truth);
+    const std::string report =
+        writeReport(state, config_.run_dir, listImages(config_.run_dir, "explorer"), truth, html_report_);
     const Summary s = summarize(state);
     std::ostringstream out;
     out << std::fixed << std::setprecision(1) << "mission " << toString(end) << ": " << s.scans << " scans, coverage "
@@ -299,6 +309,16 @@ void MissionNode::runMission() {
     ROS_INFO_STREAM(out.str());
     ROS_INFO("mission: map in %s/map, report in %s, summary in %s/summary.json", config_.run_dir.c_str(), report.c_str(),
              config_.run_dir.c_str());
+    if (html_report_) {
+      // The plots and report.html: a failure costs the pictures, never the mission.
+      const std::string problem = runReportScript(report_script_, config_.run_dir, 300.0);
+      if (problem.empty())
+        ROS_INFO("mission: plots and %s/report.html written by %s", config_.run_dir.c_str(), report_script_.c_str());
+      else
+        ROS_WARN("mission: no plots or report.html (report.md links them): %s; draw them later with "
+                 "`rosrun scanstop_mission make_report.py %s`",
+                 problem.c_str(), config_.run_dir.c_str());
+    }
   } catch (const std::exception& e) {
     ROS_ERROR("mission: could not write the report: %s", e.what());
   }

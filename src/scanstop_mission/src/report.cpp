@@ -1,11 +1,18 @@
 #include "scanstop_mission/report.h"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <thread>
 
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
@@ -215,7 +222,7 @@ std::string trajectoryCsv(const MissionState& st) {
 }
 
 std::string writeReport(const MissionState& st, const std::string& run_dir, const std::vector<std::string>& images,
-                        const std::optional<TrueCoverage>& truth) {
+                        const std::optional<TrueCoverage>& truth, bool script_plots) {
   Summary s = summarize(st);
   if (truth) {
     s.has_true_coverage = true;
@@ -225,8 +232,12 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   writeFileAtomic(run_dir + "/summary.json", toJson(s));
   writeFileAtomic(run_dir + "/trajectory.csv", trajectoryCsv(st));
 
+  // The plots: make_report.py draws them after this (script_plots), else these simple ones.
+  const std::string coverage_png = script_plots ? "report_coverage.png" : "coverage.png";
+  const std::string trajectory_png = script_plots ? "report_trajectory.png" : "trajectory.png";
+  const std::string error_png = script_plots ? "report_pose_error.png" : "pose_error.png";
   // Coverage against scan count.
-  {
+  if (!script_plots) {
     Canvas c(640, 400, 0.0, std::max<double>(1.0, st.scans.size()), 0.0, 1.0, false);
     c.axes("scans", "coverage", "Observed share of the reachable floor");
     cv::Point prev = c.px(0, 0);
@@ -240,7 +251,7 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   }
 
   // Trajectories: SLAM, odometry and (simulation) ground truth, at the scan poses.
-  {
+  if (!script_plots) {
     double xa = 1e9, xb = -1e9, ya = 1e9, yb = -1e9;
     const auto grow = [&](const Pose2D& p) {
       xa = std::min(xa, p.x);
@@ -277,7 +288,7 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   }
 
   // Position error of every scan against ground truth (simulation): SLAM and odometry alone.
-  if (s.ate_scans > 0) {
+  if (s.ate_scans > 0 && !script_plots) {
     double top = 0.01;
     for (const ScanRecord& r : st.scans)
       if (r.true_pose)
@@ -309,6 +320,7 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
 
   std::ostringstream md;
   md << "# Exploration report" << (s.world.empty() ? "" : ": " + s.world) << "\n\n"
+     << (script_plots ? "One page with every plot: [report.html](report.html) (drawn by `make_report.py`).\n\n" : "")
      << "| figure | value |\n|---|---|\n"
      << "| final state | " << s.state << " |\n"
      << "| exploration complete | " << (s.complete ? "yes" : "no") << " (" << s.complete_reason << ") |\n"
@@ -340,9 +352,10 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
      << "| modelled scan time | " << num(s.scan_time_mean_s, 1) << " s per scan |\n"
      << "| modelled mission time | " << num(s.modelled_time_s / 60.0, 1) << " min |\n"
      << "| wall time | " << num(s.elapsed_s, 1) << " s |\n\n"
-     << "## Coverage\n\n![coverage](coverage.png)\n\n"
-     << "## Trajectory\n\n![trajectory](trajectory.png)\n\n";
-  if (s.ate_scans > 0) md << "## Pose error per scan\n\n![pose error](pose_error.png)\n\nPer-scan figures: `trajectory.csv`.\n\n";
+     << "## Coverage\n\n![coverage](" << coverage_png << ")\n\n"
+     << "## Trajectory\n\n![trajectory](" << trajectory_png << ")\n\n";
+  if (s.ate_scans > 0)
+    md << "## Pose error per scan\n\n![pose error](" << error_png << ")\n\nPer-scan figures: `trajectory.csv`.\n\n";
   if (!images.empty()) {
     md << "## Explorer, step by step\n\n";
     for (const std::string& image : images) md << "![" << image << "](" << image << ")\n\n";
@@ -353,6 +366,52 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   const std::string path = run_dir + "/report.md";
   writeFileAtomic(path, md.str());
   return path;
+}
+
+std::string runReportScript(const std::string& script, const std::string& run_dir, double timeout_s) {
+  if (::access(script.c_str(), X_OK) != 0) return script + ": not an executable file";
+  const std::string log = run_dir + "/make_report.log";
+  const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return log + ": cannot open for writing";
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fd);
+    return "cannot fork to run " + script;
+  }
+  if (pid == 0) {  // the child: only async-signal-safe calls until exec
+    ::dup2(fd, STDOUT_FILENO);
+    ::dup2(fd, STDERR_FILENO);
+    const int null_in = ::open("/dev/null", O_RDONLY);
+    if (null_in >= 0) ::dup2(null_in, STDIN_FILENO);
+    char* const argv[] = {const_cast<char*>(script.c_str()), const_cast<char*>(run_dir.c_str()), nullptr};
+    ::execv(script.c_str(), argv);
+    ::_exit(127);
+  }
+  ::close(fd);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  int status = 0;
+  while (true) {
+    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) break;
+    if (r < 0) return "lost " + script + " (waitpid failed)";
+    if (std::chrono::steady_clock::now() > deadline) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      std::ostringstream out;
+      out << script << " took longer than " << timeout_s << " s and was killed (output in " << log << ")";
+      return out.str();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return "";
+  std::ostringstream out;
+  out << script << " ";
+  if (WIFEXITED(status))
+    out << "exited with status " << WEXITSTATUS(status);
+  else
+    out << "ended by signal " << WTERMSIG(status);
+  out << " (output in " << log << ")";
+  return out.str();
 }
 
 }  // namespace mission

@@ -65,7 +65,8 @@ class MissionInSim(unittest.TestCase):
         self.assertIsNotNone(summary["min_clearance_m"], summary)
         self.assertGreater(summary["legs_measured"], 0, summary)
         self.assertGreater(summary["min_clearance_m"], 0.0, summary)  # no collision: never touched
-        for f in ("report.md", "coverage.png", "trajectory.png", "pose_error.png", "trajectory.csv", "mission.log"):
+        for f in ("report.md", "report.html", "report_coverage.png", "report_trajectory.png", "report_pose_error.png",
+                  "trajectory.csv", "mission.log", "explorer/floor_map.yaml"):
             self.assertTrue(os.path.exists(os.path.join(self.run_dir, f)), f)
         self.assertTrue(any(n.endswith(".png") for n in os.listdir(os.path.join(self.run_dir, "explorer"))))
         print("summary:", json.dumps(summary))

@@ -142,6 +142,34 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
 
+TEST(Report, ScriptPlotsAreLinkedAndTheScriptRun) {
+  char pattern[] = "/tmp/scanstop_report_test_XXXXXX";
+  const std::string dir = mkdtemp(pattern);
+  // make_report.py draws the plots: report.md links report.html and its PNGs, the simple ones are not drawn.
+  const std::string text = readFile(writeReport(twoScans(), dir, {}, std::nullopt, true));
+  for (const char* name : {"(report.html)", "(report_coverage.png)", "(report_trajectory.png)", "(report_pose_error.png)"})
+    EXPECT_NE(text.find(name), std::string::npos) << name << "\n" << text;
+  EXPECT_TRUE(cv::imread(dir + "/coverage.png").empty());
+  // The script runner: success, a failing script (status and log named), a missing one, a hanging one.
+  const auto script = [&](const std::string& name, const std::string& body) {
+    const std::string path = dir + "/" + name;
+    writeFileAtomic(path, "#!/bin/sh\n" + body + "\n");
+    EXPECT_EQ(std::system(("chmod +x '" + path + "'").c_str()), 0);
+    return path;
+  };
+  EXPECT_EQ(runReportScript(script("ok.sh", "echo drawn in \"$1\""), dir, 10.0), "");
+  EXPECT_NE(readFile(dir + "/make_report.log").find("drawn in " + dir), std::string::npos);
+  const std::string failed = runReportScript(script("bad.sh", "echo broken >&2; exit 3"), dir, 10.0);
+  EXPECT_NE(failed.find("exited with status 3"), std::string::npos) << failed;
+  EXPECT_NE(failed.find(dir + "/make_report.log"), std::string::npos) << failed;
+  EXPECT_NE(readFile(dir + "/make_report.log").find("broken"), std::string::npos);
+  const std::string missing = runReportScript(dir + "/none.py", dir, 10.0);
+  EXPECT_NE(missing.find(dir + "/none.py: not an executable file"), std::string::npos) << missing;
+  const std::string hung = runReportScript(script("hang.sh", "exec sleep 30"), dir, 0.3);
+  EXPECT_NE(hung.find("took longer than 0.3 s and was killed"), std::string::npos) << hung;
+  EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
+}
+
 TEST(Report, RealRobotHasNoGroundTruthFigures) {
   MissionState st = twoScans();
   for (auto& s : st.scans) s.true_pose.reset();

@@ -16,10 +16,17 @@ namespace explorer {
 /// floor, red obstacles, black unknown, orange: open cells that keep exploration going), "distance" (distance transform of the accessible floor,
 /// skeleton in blue, anchors in yellow), "cost" (brighter = farther), "knowledge" (brighter = more), "evaluation"
 /// (brighter = better; the target is the brightest cell). Each has the robot (green), the
-/// landmarks (red), the path (cyan) and the target (magenta) drawn in.
+/// landmarks (red), the path (cyan) and the target (magenta) drawn in. Below the map (rows
+/// scale * height and on) a white footer holds a scale bar and the legend of the image's colours.
 std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& result, int scale = 2);
 /// Writes <dir>/<prefix><name>.png for every image; throws IoError naming the file.
 void writePlanImages(const PlanResult& result, const std::string& dir, const std::string& prefix, int scale = 2);
+
+/// The floor grid as a greyscale PNG in map_server's convention (floor 254, obstacle 0, unknown 205,
+/// row 0 = highest y, one pixel per cell) and its YAML (image, resolution, origin [x, y, 0], ...):
+/// the georeferenced map the run report draws the trajectory over.
+std::string floorMapPng(const PlanResult& result);
+std::string floorMapYaml(const PlanResult& result, const std::string& image);
 
 /// One JSON object: success, message, complete, complete_reason, target {x, y}, score, cost_m,
 /// coverage, areas, open_cells, landmarks, path [{x, y, scan}], timings_ms.

@@ -52,6 +52,8 @@ class MissionNode {
   ros::NodeHandle nh_;
   MissionConfig config_;
   bool shutdown_when_done_ = false;
+  bool html_report_ = true;        ///< run make_report.py after report.md
+  std::string report_script_;      ///< its path (default: beside this executable)
   double master_timeout_s_ = 30.0;
   std::atomic<bool> paused_for_master_{false};  ///< the watchdog paused the mission (it resumes it)
   std::unique_ptr<RosRobotSystem> robot_;

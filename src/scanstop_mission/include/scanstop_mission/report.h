@@ -75,8 +75,15 @@ std::string trajectoryCsv(const MissionState& state);
 /// `images` lists further images (relative to run_dir, e.g. the explorer's per-step figures) that the
 /// report links. Returns the path of report.md. Throws IoError.
 /// `truth`: the ground-truth coverage when the run was simulated (summary.json and the report show it).
+/// `script_plots`: make_report.py draws the plots afterwards (report.html, report_coverage.png,
+/// report_trajectory.png, report_pose_error.png): report.md links those and the PNGs above are not drawn.
 std::string writeReport(const MissionState& state, const std::string& run_dir, const std::vector<std::string>& images,
-                        const std::optional<TrueCoverage>& truth = std::nullopt);
+                        const std::optional<TrueCoverage>& truth = std::nullopt, bool script_plots = false);
+
+/// Runs `script` RUN_DIR (make_report.py) with its output in run_dir/make_report.log and waits up to
+/// `timeout_s` (then kills it). Returns "" on success, else what went wrong (exit status, signal,
+/// timeout, cannot start), for a warning.
+std::string runReportScript(const std::string& script, const std::string& run_dir, double timeout_s);
 
 }  // namespace mission
 }  // namespace scanstop
