@@ -16,6 +16,7 @@
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
+#include "scanstop_common/ros/robot_body.h"
 #include "scanstop_explorer/render.h"
 
 namespace scanstop {
@@ -46,7 +47,6 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   // ROS parameter names are the config fields' names (so a ConfigError names the parameter).
   optional(pnh, "resolution_m", c.floor.resolution_m);
   optional(pnh, "floor_layer_m", c.floor.floor_layer_m);
-  optional(pnh, "robot_height_m", c.floor.robot_height_m);
   optional(pnh, "grid_margin_m", c.floor.grid_margin_m);
   optional(pnh, "min_floor_points", c.floor.min_floor_points);
   optional(pnh, "min_obstacle_points", c.floor.min_obstacle_points);
@@ -54,7 +54,26 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "speckle_min_points", c.floor.speckle_min_points);
   optional(pnh, "speckle_max_cells", c.floor.speckle_max_cells);
   optional(pnh, "min_obstacle_scans", c.floor.min_obstacle_scans);
-  optional(pnh, "robot_radius_m", c.planner.robot_radius_m);
+  // The body (robot_body/..., config/robot_body.yaml) gives the inflation and the obstacle layer:
+  // robot_radius_m = radius + inflation_margin_m, the layer's top = height + obstacle_height_margin_m.
+  // ~robot_radius_m / ~robot_height_m set explicitly override them (a WARN names both).
+  const RobotBody body = ros_params::readRobotBody(pnh);
+  double inflation_margin_m = 0.04, obstacle_height_margin_m = 0.03;
+  optional(pnh, "inflation_margin_m", inflation_margin_m);
+  optional(pnh, "obstacle_height_margin_m", obstacle_height_margin_m);
+  requireInRange(pnh.resolveName("inflation_margin_m"), inflation_margin_m, 0.0, 1.0, "m");
+  requireInRange(pnh.resolveName("obstacle_height_margin_m"), obstacle_height_margin_m, 0.0, 1.0, "m");
+  c.planner.robot_radius_m = body.radius_m + inflation_margin_m;
+  c.floor.robot_height_m = body.height_m + obstacle_height_margin_m - 0.5 * c.floor.floor_layer_m;
+  const auto override_body = [&](const std::string& name, double& value, double from_body) {
+    known.push_back(name);
+    if (!pnh.hasParam(name)) return;
+    ros_params::optional(pnh, name, value);
+    ROS_WARN("explorer_node: %s = %.3f m overrides %.3f m from the robot body (config/robot_body.yaml)",
+             pnh.resolveName(name).c_str(), value, from_body);
+  };
+  override_body("robot_radius_m", c.planner.robot_radius_m, c.planner.robot_radius_m);
+  override_body("robot_height_m", c.floor.robot_height_m, c.floor.robot_height_m);
   optional(pnh, "d_max_m", c.planner.d_max_m);
   optional(pnh, "k_r_m", c.planner.k_r_m);
   optional(pnh, "k0", c.planner.k0);

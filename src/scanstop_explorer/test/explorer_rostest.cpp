@@ -180,6 +180,32 @@ TEST(ExplorerNode, BadParametersStopTheNodeNamingThem) {
   EXPECT_EQ(configErrorOf("/good"), "");
 }
 
+// The body (robot_body/..., config/robot_body.yaml, searched from the node's namespace up) gives the
+// inflation and the obstacle layer's top; an explicit robot_radius_m overrides it; a bad body value
+// stops the node naming the full parameter.
+TEST(ExplorerNode, TheRobotBodyGivesInflationAndObstacleLayer) {
+  for (const char* ns : {"/body_ns", "/no_body_ns", "/bad_body"}) ros::param::del(ns);
+  ros::param::set("/body_ns/robot_body/radius", 0.35);
+  ros::param::set("/body_ns/robot_body/height", 1.0);
+  ros::param::set("/body_ns/explorer/inflation_margin_m", 0.05);
+  ExplorerConfig c;
+  NodeConfig n;
+  readParameters(ros::NodeHandle("/body_ns/explorer"), c, n);
+  EXPECT_NEAR(c.planner.robot_radius_m, 0.40, 1e-9);
+  EXPECT_NEAR(0.5 * c.floor.floor_layer_m + c.floor.robot_height_m, 1.03, 1e-9);  // default margin 0.03
+  ros::param::set("/body_ns/explorer/robot_radius_m", 0.5);
+  readParameters(ros::NodeHandle("/body_ns/explorer"), c, n);
+  EXPECT_NEAR(c.planner.robot_radius_m, 0.5, 1e-9);
+  // No body anywhere: the built-in numbers, which equal config/robot_body.yaml's (0.26 + 0.04, top 0.63).
+  ExplorerConfig d;
+  readParameters(ros::NodeHandle("/no_body_ns/explorer"), d, n);
+  EXPECT_NEAR(d.planner.robot_radius_m, 0.30, 1e-9);
+  EXPECT_NEAR(0.5 * d.floor.floor_layer_m + d.floor.robot_height_m, 0.63, 1e-9);
+  ros::param::set("/bad_body/robot_body/radius", -1.0);
+  const std::string bad = configErrorOf("/bad_body/explorer");
+  EXPECT_NE(bad.find("/bad_body/robot_body/radius"), std::string::npos) << bad;
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "explorer_rostest");

@@ -22,6 +22,7 @@
 #include "scanstop_explorer/ground_truth.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
+#include "scanstop_common/ros/robot_body.h"
 #include "scanstop_mission/report.h"
 #include "scanstop_mission/run_directory.h"
 
@@ -91,6 +92,19 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "contact_offset", config_.contact_offset_m);
   ros_params::optional(pnh, "max_contacts", config_.max_contacts);
   ros_params::optional(pnh, "leg_check", config_.leg_check);
+  // The swept disc and the heights of the leg check come from the body (robot_body/...,
+  // config/robot_body.yaml): radius + leg_check_body_margin, up to the body's height.
+  // ~leg_check_radius / ~leg_check_max_z set explicitly override them.
+  {
+    const RobotBody body = ros_params::readRobotBody(pnh);
+    double body_margin = 0.02;
+    ros_params::optional(pnh, "leg_check_body_margin", body_margin);
+    if (!(body_margin >= 0.0 && body_margin <= 1.0))
+      throw ConfigError("parameter '" + pnh.resolveName("leg_check_body_margin") + "' = " + std::to_string(body_margin) +
+                        " m must be in [0, 1] m");
+    config_.leg_check_radius_m = body.radius_m + body_margin;
+    config_.leg_check_max_z_m = body.height_m;
+  }
   ros_params::optional(pnh, "leg_check_radius", config_.leg_check_radius_m);
   ros_params::optional(pnh, "leg_check_margin", config_.leg_check_margin_m);
   ros_params::optional(pnh, "leg_check_min_z", config_.leg_check_min_z_m);
@@ -151,7 +165,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   // A misspelt parameter would silently keep its default: refuse it.
   const std::vector<std::string> unknown = ros_params::unknownParameters(
       pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
-            "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts", "leg_check", "leg_check_radius", "leg_check_margin",
+            "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
             "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
@@ -161,7 +175,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
     throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
                       "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, return_home, home_tolerance, home_scan_travel, "
-                      "contact_backoff, contact_offset, max_contacts, leg_check, leg_check_radius, leg_check_margin, leg_check_min_z, "
+                      "contact_backoff, contact_offset, max_contacts, leg_check, leg_check_radius, leg_check_body_margin, leg_check_margin, leg_check_min_z, "
                       "leg_check_max_z, leg_check_self, leg_check_min_points, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
                       "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns, run_identity, "

@@ -16,6 +16,7 @@
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
+#include "scanstop_common/ros/robot_body.h"
 #include "scanstop_sim/world_builder.h"
 
 namespace scanstop {
@@ -82,7 +83,16 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, pp + "motion/rotation_position_sigma", mo.rotation_position_sigma_m_per_rad);
   ros_params::optional(pnh, "motion/linear_speed", mo.linear_speed_mps);
   ros_params::optional(pnh, "motion/angular_speed", mo.angular_speed_radps);
-  ros_params::optional(pnh, "robot_radius", config.robot_radius_m);
+  // The body (robot_body/..., config/robot_body.yaml): the collision disc and the height up to
+  // which the world's geometry blocks it. ~robot_radius overrides the disc (a WARN names both).
+  const RobotBody body = ros_params::readRobotBody(nh);
+  config.robot_radius_m = body.radius_m;
+  world_options.obstacle_max_z_m = body.height_m;
+  if (pnh.hasParam("robot_radius")) {
+    ros_params::optional(pnh, "robot_radius", config.robot_radius_m);
+    ROS_WARN("sim_node: %s = %.3f m overrides the robot body's radius %.3f m (config/robot_body.yaml)",
+             pnh.resolveName("robot_radius").c_str(), config.robot_radius_m, body.radius_m);
+  }
   ros_params::optional(pnh, "max_forward", config.max_forward_m);
   ros_params::optional(pnh, "max_rotate", config.max_rotate_rad);
   ros_params::optional(pnh, "outlier_filter", config.outlier_filter);

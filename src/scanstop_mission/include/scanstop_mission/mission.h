@@ -55,10 +55,10 @@ struct MissionConfig {
   /// the body; a leg shortened so is logged, the target marked unreachable, the robot rescans and
   /// the mission replans. false: no check (the thesis).
   bool leg_check = true;
-  double leg_check_radius_m = 0.28;    ///< the body's swept radius plus a margin [m], (0, 2]
+  double leg_check_radius_m = 0.28;    ///< the body's swept radius plus a margin [m], (0, 2] (mission_node: robot_body/radius + 0.02)
   double leg_check_margin_m = 0.05;    ///< stop this far before the first obstruction [m], [0, 1]
   double leg_check_min_z_m = 0.03;     ///< the body's height band: from (above the floor layer) [m]
-  double leg_check_max_z_m = 0.6;      ///< ... to (the body's and the mast's height) [m]
+  double leg_check_max_z_m = 0.6;      ///< ... to (the body's and the mast's height) [m] (mission_node: robot_body/height)
   double leg_check_self_m = 0.3;       ///< scan points this close to base_link are the robot itself [m], [0, 2]
   int leg_check_min_points = 3;        ///< points that make an obstruction (random readings are single), [1, 1000]
   /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
