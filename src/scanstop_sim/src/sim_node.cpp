@@ -7,6 +7,7 @@
 #include <visualization_msgs/Marker.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <utility>
 #include <vector>
@@ -166,6 +167,7 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   rotate_srv_ = nh.advertiseService("base/rotate", &SimNode::onRotate, this);
   forward_srv_ = nh.advertiseService("base/forward", &SimNode::onForward, this);
   reset_srv_ = nh.advertiseService("sim/reset", &SimNode::onReset, this);
+  hidden_obstacle_srv_ = nh.advertiseService("sim/add_hidden_obstacle", &SimNode::onAddHiddenObstacle, this);
   clock_timer_ = nh.createWallTimer(ros::WallDuration(0.1), &SimNode::onClockTimer, this);
   publishState();
   publishStaticTransforms();
@@ -326,7 +328,12 @@ bool SimNode::onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::For
   res.success = false;
   res.message = checkForward(req.distance_m, sim_->config().max_forward_m);
   if (!res.message.empty()) return true;
-  const MotionOutput out = runMotion([&] { return sim_->forward(req.distance_m); }, req.distance_m, 0.0, &res.message);
+  const MotionOutput out = runMotion(
+      [&] {
+        placeArmedObstacle(req.distance_m);
+        return sim_->forward(req.distance_m);
+      },
+      req.distance_m, 0.0, &res.message);
   if (!res.message.empty()) return true;
   publishClearance("forward", req.distance_m, out);
   res.achieved_distance_m = out.achieved;
@@ -427,6 +434,71 @@ bool SimNode::onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::Rese
   res.success = true;
   publishState();
   publishStaticTransforms();
+  return true;
+}
+
+void SimNode::placeArmedObstacle(double distance_m) {
+  if (!armed_obstacle_) return;
+  const Simulator::HiddenObstacle& a = *armed_obstacle_;
+  if (distance_m < a.x - a.radius - sim_->config().robot_radius_m + 0.05) return;  // this motion would not reach it
+  const Pose2D w = sim_->trueInWorld() * Pose2D(a.x, a.y, 0.0);
+  try {
+    sim_->addHiddenObstacle({w.x, w.y, a.radius});
+    ROS_WARN("sim_node: hidden obstacle at (%.3f, %.3f) m in %s, radius %.3f m, %.2f m ahead of the robot (the laser "
+             "does not see it)", w.x, w.y, world_frame_.c_str(), a.radius, a.x);
+  } catch (const std::exception& e) {
+    ROS_WARN("sim_node: the armed hidden obstacle was not placed: %s", e.what());
+  }
+  armed_obstacle_.reset();
+}
+
+bool SimNode::onAddHiddenObstacle(scanstop_msgs::AddHiddenObstacle::Request& req,
+                                  scanstop_msgs::AddHiddenObstacle::Response& res) {
+  res.success = false;
+  if (moving_) {
+    res.message = "the base is moving (a rotate/forward motion is running): add the obstacle after it";
+    return true;
+  }
+  const std::string frame = req.frame_id.empty() ? world_frame_ : req.frame_id;
+  if (frame != world_frame_ && frame != map_frame_) {
+    res.message = "frame_id '" + req.frame_id + "' is neither '" + world_frame_ + "' nor '" + map_frame_ + "'";
+    return true;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  Simulator::HiddenObstacle h;
+  h.radius = req.radius;
+  if (req.on_next_forward) {
+    if (!std::isfinite(req.x) || !std::isfinite(req.y) || !(req.x > 0.0) || !(req.radius > 0.0 && req.radius <= 2.0)) {
+      res.message = "on_next_forward needs a finite x > 0 m ahead and a radius in (0, 2] m";
+      return true;
+    }
+    armed_obstacle_ = Simulator::HiddenObstacle{req.x, req.y, req.radius};
+    res.success = true;
+    res.message = "armed: a hidden obstacle appears " + std::to_string(req.x) + " m ahead at the next forward motion that reaches it";
+    ROS_WARN("sim_node: %s", res.message.c_str());
+    return true;
+  }
+  if (frame == map_frame_) {
+    const Pose2D w = sim_->start() * Pose2D(req.x, req.y, 0.0);
+    h.x = w.x;
+    h.y = w.y;
+  } else {
+    h.x = req.x;
+    h.y = req.y;
+  }
+  try {
+    sim_->addHiddenObstacle(h);
+  } catch (const std::exception& e) {
+    res.message = e.what();
+    return true;
+  }
+  res.success = true;
+  char text[160];
+  std::snprintf(text, sizeof(text), "hidden obstacle at (%.3f, %.3f) m in %s, radius %.3f m", h.x, h.y,
+                world_frame_.c_str(), h.radius);
+  res.message = text;
+  ROS_WARN("sim_node: %s (the laser does not see it)", text);
+  publishState();
   return true;
 }
 

@@ -133,6 +133,7 @@ std::string Simulator::saveState() const {
   out << "scan_counter " << scan_counter_ << '\n';
   out << "seed " << config_.seed << '\n';
   out << "rng " << rng_ << '\n';
+  for (const HiddenObstacle& h : hidden_) out << "hidden_obstacle " << h.x << ' ' << h.y << ' ' << h.radius << '\n';
   out << "end\n";
   return out.str();
 }
@@ -147,6 +148,7 @@ void Simulator::restoreState(const std::string& text) {
   uint64_t counter = 0, seed = 0;
   std::mt19937_64 rng;
   std::string world;
+  std::vector<HiddenObstacle> hidden;
   bool have[8] = {false, false, false, false, false, false, false, false};
   bool ended = false;
   while (std::getline(in, line)) {
@@ -179,6 +181,12 @@ void Simulator::restoreState(const std::string& text) {
     } else if (key == "rng") {
       if (!(ls >> rng)) throw std::invalid_argument("field 'rng' is not a random generator state of 312 numbers (truncated file?)");
       have[7] = true;
+    } else if (key == "hidden_obstacle") {
+      HiddenObstacle h;
+      if (!(ls >> h.x >> h.y >> h.radius) || !std::isfinite(h.x) || !std::isfinite(h.y) || !(h.radius > 0.0 && h.radius <= 2.0))
+        throw std::invalid_argument("field 'hidden_obstacle' is not x y radius (finite, radius in (0, 2] m): '" +
+                                    line.substr(0, 80) + "'");
+      hidden.push_back(h);
     } else if (key == "end") {
       ended = true;
       break;
@@ -207,6 +215,33 @@ void Simulator::restoreState(const std::string& text) {
   scan_counter_ = counter;
   config_.seed = seed;
   rng_ = rng;
+  hidden_ = hidden;
+}
+
+void Simulator::addHiddenObstacle(const HiddenObstacle& h) {
+  if (!std::isfinite(h.x) || !std::isfinite(h.y))
+    throw std::invalid_argument("hidden obstacle centre (" + num(h.x) + ", " + num(h.y) + ") is not finite");
+  if (!(h.radius > 0.0 && h.radius <= 2.0))
+    throw std::invalid_argument("hidden obstacle radius " + num(h.radius) + " m is outside (0, 2] m");
+  const double d = std::hypot(h.x - true_world_.x, h.y - true_world_.y);
+  if (d <= h.radius + config_.robot_radius_m)
+    throw std::invalid_argument("hidden obstacle at (" + num(h.x) + ", " + num(h.y) + ") radius " + num(h.radius) +
+                                " m would touch the robot where it stands (" + num(d) + " m from its centre)");
+  hidden_.push_back(h);
+}
+
+bool Simulator::bodyCollides(const Eigen::Vector2d& p) const {
+  if (world_.discCollides(p, config_.robot_radius_m)) return true;
+  for (const HiddenObstacle& h : hidden_)
+    if ((p - Eigen::Vector2d(h.x, h.y)).norm() <= h.radius + config_.robot_radius_m) return true;
+  return false;
+}
+
+double Simulator::bodyClearance(const Eigen::Vector2d& p) const {
+  const double r = config_.robot_radius_m;
+  double c = std::max(0.0, world_.clearanceWithin(p, r + kClearanceRange) - r);
+  for (const HiddenObstacle& h : hidden_) c = std::min(c, std::max(0.0, (p - Eigen::Vector2d(h.x, h.y)).norm() - h.radius - r));
+  return c;
 }
 
 ScanOutput Simulator::scan(int planes) {
@@ -275,21 +310,18 @@ MotionOutput Simulator::forward(double distance_m) {
   const double sign = f.true_length_m < 0 ? -1.0 : 1.0;
   const Pose2D before = true_world_;
   double travelled = length;
-  const auto bodyClearance = [this](const Pose2D& p) {
-    return std::max(0.0, world_.clearanceWithin(Eigen::Vector2d(p.x, p.y), config_.robot_radius_m + kClearanceRange) -
-                             config_.robot_radius_m);
-  };
-  out.min_clearance_m = bodyClearance(before);
+  const auto clearanceAt = [this](const Pose2D& p) { return bodyClearance(Eigen::Vector2d(p.x, p.y)); };
+  out.min_clearance_m = clearanceAt(before);
   for (double s = config_.collision_step_m; s < length + config_.collision_step_m; s += config_.collision_step_m) {
     const double t = std::min(s, length);
     const Pose2D p = before * f.along(sign * t);
-    if (world_.discCollides(Eigen::Vector2d(p.x, p.y), config_.robot_radius_m)) {
+    if (bodyCollides(Eigen::Vector2d(p.x, p.y))) {
       travelled = std::max(0.0, t - config_.collision_step_m);  // the last pose without contact
       out.collision = true;
       out.min_clearance_m = 0.0;
       break;
     }
-    out.min_clearance_m = std::min(out.min_clearance_m, bodyClearance(p));
+    out.min_clearance_m = std::min(out.min_clearance_m, clearanceAt(p));
   }
   true_world_ = before * f.along(sign * travelled);
   if (!out.collision) true_world_ = true_world_ * Pose2D(0, 0, f.finish_angle_rad);
@@ -311,7 +343,7 @@ MotionOutput Simulator::rotate(double angle_rad) {
   const Pose2D start = true_world_;
   const Pose2D delta = sampleRotation(config_.errors.motion, angle_rad, rng_);
   const Pose2D next = true_world_ * delta;
-  if (world_.discCollides(Eigen::Vector2d(next.x, next.y), config_.robot_radius_m)) {
+  if (bodyCollides(Eigen::Vector2d(next.x, next.y))) {
     // The drift while turning would push the robot into an obstacle: it turns in place instead.
     true_world_ = true_world_ * Pose2D(0, 0, delta.yaw);
   } else {
@@ -321,10 +353,7 @@ MotionOutput Simulator::rotate(double angle_rad) {
   // A disc turning in place keeps its clearance; the drift while turning moves it from the start
   // to the end (a few millimetres).
   for (const Pose2D& p : {start, true_world_})
-    out.min_clearance_m = std::min(
-        out.min_clearance_m,
-        std::max(0.0, world_.clearanceWithin(Eigen::Vector2d(p.x, p.y), config_.robot_radius_m + kClearanceRange) -
-                          config_.robot_radius_m));
+    out.min_clearance_m = std::min(out.min_clearance_m, bodyClearance(Eigen::Vector2d(p.x, p.y)));
   odom_ = odom_ * Pose2D(0.0, 0.0, angle_rad);
   out.duration_s = std::abs(angle_rad) / config_.errors.motion.angular_speed_radps;
   clock_s_ += out.duration_s;

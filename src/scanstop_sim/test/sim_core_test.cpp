@@ -229,6 +229,57 @@ TEST(Simulator, ForwardMotionStopsAtContactAndReportsTheCollision) {
   EXPECT_NEAR(sim.trueInWorld().x, contact - 1.0, 2 * config.collision_step_m);
 }
 
+// A hidden obstacle (the laser does not see it: a forced contact) stops the robot like a wall, enters
+// the true clearance, survives saveState/restoreState, and bad values change nothing.
+TEST(Simulator, AHiddenObstacleStopsTheRobotButNotTheLaser) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-5, -5, 5, 5);
+  b.box({4.0, -5, 0}, {4.1, 5, 2.5});  // a wall at x = 4
+  SimConfig config;
+  config.scanner.max_range_m = 5.6;
+  Simulator sim(World::fromMesh(b.mesh(), "hidden"), config, Pose2D(0, 0, 0));
+  const double r = config.robot_radius_m;
+  const auto rangeAhead = [](const ScanOutput& s) {  // nearest return within 5 cm of the x axis, ahead
+    double best = 1e9;
+    for (const auto& p : s.cloud.points)
+      if (p.x() > 0.3f && std::abs(p.y()) < 0.1f && std::abs(p.z() - 0.45f) < 0.3f) best = std::min<double>(best, p.x());
+    return best;
+  };
+  const double before = rangeAhead(sim.scan(50));
+  sim.addHiddenObstacle({2.0, 0.0, 0.1});
+  ASSERT_EQ(sim.hiddenObstacles().size(), 1u);
+  EXPECT_NEAR(rangeAhead(sim.scan(50)), before, 0.02);  // the laser still sees the wall at 4 m
+  EXPECT_NEAR(before, 4.0, 0.05);
+  // 1 m towards it: the clearance (measured out to kClearanceRange = 1 m) drops to 0.64 m; then the contact.
+  MotionOutput out = sim.forward(1.0);
+  EXPECT_FALSE(out.collision);
+  EXPECT_NEAR(out.min_clearance_m, 2.0 - 0.1 - r - 1.0, 2e-3);
+  out = sim.forward(2.0);
+  EXPECT_TRUE(out.collision);
+  EXPECT_EQ(out.min_clearance_m, 0.0);
+  EXPECT_LE(sim.trueInWorld().x, 2.0 - 0.1 - r + 1e-9);
+  EXPECT_GT(sim.trueInWorld().x, 2.0 - 0.1 - r - 2 * config.collision_step_m);
+  // A restarted simulator keeps it.
+  Simulator again(World::fromMesh(b.mesh(), "hidden"), config, Pose2D(0, 0, 0));
+  again.restoreState(sim.saveState());
+  ASSERT_EQ(again.hiddenObstacles().size(), 1u);
+  EXPECT_TRUE(again.forward(0.5).collision);
+  // Bad values: named, nothing added.
+  EXPECT_THROW(sim.addHiddenObstacle({NAN, 0.0, 0.1}), std::invalid_argument);
+  EXPECT_THROW(sim.addHiddenObstacle({3.0, 0.0, 0.0}), std::invalid_argument);
+  EXPECT_THROW(sim.addHiddenObstacle({3.0, 0.0, 2.5}), std::invalid_argument);
+  try {
+    sim.addHiddenObstacle({sim.trueInWorld().x + 0.2, 0.0, 0.1});  // on the robot
+    FAIL() << "an obstacle on the robot was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("would touch the robot"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(sim.hiddenObstacles().size(), 1u);
+  std::string state = sim.saveState();
+  state.replace(state.find("hidden_obstacle"), 15, "hidden_obstacle x");
+  EXPECT_THROW(again.restoreState(state), std::invalid_argument);
+}
+
 TEST(Simulator, ThesisOdometryDriftsAwayFromTheTruth) {
   SimConfig config;
   config.errors = makeProfile("thesis");

@@ -7,6 +7,7 @@
 #include <ros/ros.h>
 #include <scanstop_msgs/Forward.h>
 #include <scanstop_msgs/MotionClearance.h>
+#include <scanstop_msgs/AddHiddenObstacle.h>
 #include <scanstop_msgs/ResetSim.h>
 #include <scanstop_msgs/Rotate.h>
 #include <scanstop_msgs/TakeScan.h>
@@ -19,6 +20,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "scanstop_sim/simulator.h"
@@ -41,6 +43,7 @@ class SimNode {
   bool onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res);
   bool onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res);
   bool onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::ResetSim::Response& res);
+  bool onAddHiddenObstacle(scanstop_msgs::AddHiddenObstacle::Request& req, scanstop_msgs::AddHiddenObstacle::Response& res);
   /// Runs one motion: refused (`refused` says why) while another one runs; with motion_time_scale
   /// > 0 it takes its modelled duration on the wall clock, during which odom carries its twist and
   /// scanner/take_scan is refused.
@@ -73,7 +76,11 @@ class SimNode {
   double clock_start_s_ = 1.0;
   std::string world_frame_ = "world", map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link",
               laser_frame_ = "laser";
-  ros::ServiceServer take_scan_srv_, rotate_srv_, forward_srv_, reset_srv_;
+  ros::ServiceServer take_scan_srv_, rotate_srv_, forward_srv_, reset_srv_, hidden_obstacle_srv_;
+  /// A hidden obstacle waiting for the next forward motion that reaches it (base_link x, y, radius).
+  std::optional<Simulator::HiddenObstacle> armed_obstacle_;
+  /// Places armed_obstacle_ when a forward motion of distance_m reaches it (under mutex_).
+  void placeArmedObstacle(double distance_m);
   ros::Publisher clock_pub_, odom_pub_, truth_pub_, scan_pub_, progress_pub_, marker_pub_;
   ros::Publisher clearance_pub_;  ///< ground_truth/clearance: one MotionClearance per motion
   uint32_t motion_index_ = 0;

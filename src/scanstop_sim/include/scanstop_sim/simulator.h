@@ -11,6 +11,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "scanstop_common/cloud.h"
 #include "scanstop_common/pose.h"
@@ -118,6 +119,17 @@ class Simulator {
   /// changes nothing then.
   void restoreState(const std::string& text);
 
+  /// An obstacle the scanner cannot see (glass, a person stepping in, a test's forced contact): a
+  /// vertical cylinder at (x, y) in the world frame, radius [m], that stops the robot and enters its
+  /// true clearance like the world's geometry, while rays pass through it. Kept in saveState().
+  struct HiddenObstacle {
+    double x = 0.0, y = 0.0, radius = 0.0;
+  };
+  /// Adds one. Throws std::invalid_argument (and adds nothing) for a non-finite centre, a radius
+  /// outside (0, 2] m, or one that would touch the robot where it stands now.
+  void addHiddenObstacle(const HiddenObstacle& obstacle);
+  const std::vector<HiddenObstacle>& hiddenObstacles() const { return hidden_; }
+
   const Pose2D& trueInWorld() const { return true_world_; }
   /// Ground truth in the map frame (relative to the start pose).
   Pose2D trueInMap() const { return start_.inverse() * true_world_; }
@@ -134,6 +146,12 @@ class Simulator {
   std::mt19937_64 rng_;
   uint64_t scan_counter_ = 0;
   double clock_s_ = 0.0;
+  std::vector<HiddenObstacle> hidden_;
+
+  /// The body's disc at p touches the world's obstacle map or a hidden obstacle.
+  bool bodyCollides(const Eigen::Vector2d& p) const;
+  /// The body's true clearance at p (world and hidden obstacles), searched out to kClearanceRange [m].
+  double bodyClearance(const Eigen::Vector2d& p) const;
 };
 
 }  // namespace sim
