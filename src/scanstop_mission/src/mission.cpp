@@ -490,8 +490,16 @@ void Mission::noteMotion(const MotionResult& r, bool leg) {
 void Mission::escapeContact(int sign, const std::string& what) {
   const Pose2D est = snapshot().estimate();
   if (sign != 0) {
-    const Eigen::Vector2d contact(est.x + sign * config_.contact_offset_m * std::cos(est.yaw),
-                                  est.y + sign * config_.contact_offset_m * std::sin(est.yaw));
+    // What the body touched: the latest scan's point in the body's height band nearest to the robot,
+    // within contact_offset + 0.1 m of its centre and not behind the way it drove (a door jamb beside the
+    // robot stays a jamb: a disc straight ahead would close the door); else contact_offset ahead.
+    Eigen::Vector2d contact(est.x + sign * config_.contact_offset_m * std::cos(est.yaw),
+                            est.y + sign * config_.contact_offset_m * std::sin(est.yaw));
+    std::string where = "ahead";
+    if (const std::optional<Eigen::Vector2d> touched = touchedPoint(sign)) {
+      contact = est.transformPoint(*touched);
+      where = "at the nearest point of the latest scan";
+    }
     size_t n = 0;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -499,8 +507,8 @@ void Mission::escapeContact(int sign, const std::string& what) {
       n = state_.contacts.size();
     }
     event("contact " + std::to_string(n) + " of at most " + std::to_string(config_.max_contacts) + " at (" +
-              fmt(contact.x()) + ", " + fmt(contact.y()) + ") on a " + what +
-              ": an obstacle for every later plan",
+              fmt(contact.x()) + ", " + fmt(contact.y()) + ") on a " + what + " (" + where +
+              "): an obstacle for every later plan",
           true);
   }
   if (config_.contact_backoff_m <= 0.0) return;
@@ -514,6 +522,29 @@ void Mission::escapeContact(int sign, const std::string& what) {
               " m: " + r.message,
           true);
   save();
+}
+
+std::optional<Eigen::Vector2d> Mission::touchedPoint(int sign) const {
+  if (obstacles_.empty()) return std::nullopt;
+  Pose2D odom_now;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    odom_now = state_.odom_now;
+  }
+  const Pose2D T = odom_now.inverse() * obstacles_odom_;  // the scan's base_link to the present one
+  const double reach = config_.contact_offset_m + 0.1, reach2 = reach * reach;  // odometry since the scan: a few cm
+  std::optional<Eigen::Vector2d> best;
+  double best2 = reach2;
+  for (const Eigen::Vector2d& q : obstacles_) {
+    const Eigen::Vector2d p = T.transformPoint(q);
+    if (sign * p.x() < -0.05) continue;  // behind the way it drove
+    const double d2 = p.squaredNorm();
+    if (d2 <= best2) {
+      best2 = d2;
+      best = p;
+    }
+  }
+  return best;
 }
 
 bool Mission::contactBoundReached() const {

@@ -521,6 +521,28 @@ TEST(Mission, AfterAContactTheRobotBacksOffAndEveryLaterPlanKnowsTheContact) {
   EXPECT_TRUE(resumed.snapshot().contacts[0].isApprox(s.contacts[0]));
 }
 
+TEST(Mission, TheContactIsTheScannedPointTheBodyTouchedNotAlwaysStraightAhead) {
+  // The leg (to (3, 0.5), 9.5 deg off the x axis) meets a wall across it at (1.5, 0.25); the scans
+  // see the wall but the leg check is off. The contact is the scanned wall point nearest to the robot,
+  // (1.5, ~0.21): on the wall, not contact_offset ahead along the heading inside the room.
+  TempDir dir;
+  FakeSystem sys;
+  sys.walls = {{{1.5, -1.0}, {1.5, 1.0}}};
+  sys.targets = {{3.0, 0.5}, {0.0, 2.0}};
+  sys.scan_walls = true;
+  MissionConfig c = config(dir.path());
+  c.leg_check = false;
+  Mission m(c, sys, quiet, quiet);
+  m.run();
+  const MissionState s = m.snapshot();
+  ASSERT_GE(s.contacts.size(), 1u);
+  EXPECT_NEAR(s.contacts[0].x(), 1.5, 0.03);
+  EXPECT_NEAR(s.contacts[0].y(), 0.21, 0.08);
+  bool logged = false;
+  for (const auto& e : s.events) logged = logged || e.what.find("(at the nearest point of the latest scan)") != std::string::npos;
+  EXPECT_TRUE(logged);
+}
+
 TEST(Mission, TheContactBoundEndsTheMissionWithItsReasonAndKeepsTheMap) {
   TempDir dir;
   FakeSystem sys;

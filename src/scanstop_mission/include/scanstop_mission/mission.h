@@ -9,6 +9,7 @@
 #include <condition_variable>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "scanstop_mission/mission_state.h"
@@ -41,9 +42,11 @@ struct MissionConfig {
   /// After a collision or stall the robot backs off straight backwards by this much (the way it
   /// came on a forward leg), so that the next motion does not start in contact [m], [0, 1]; 0 = off.
   double contact_backoff_m = 0.3;
-  /// Where the contact is taken to be: this far ahead of base_link in the driving direction (the
-  /// body's front edge from its centre; the Pioneer 2 DX's 0.26 m swept radius plus a little) [m],
-  /// [0, 2]. The point joins MissionState::contacts and every later plan as an obstacle.
+  /// Where the contact is taken to be: the latest scan's point in the body's height band nearest to
+  /// the robot within this distance + 0.1 m of base_link (not behind it); without one, this far ahead in the
+  /// driving direction (the body's front edge from its centre; the Pioneer 2 DX's 0.26 m swept
+  /// radius plus a little) [m], [0, 2]. The point joins MissionState::contacts and every later plan
+  /// as an obstacle.
   double contact_offset_m = 0.3;
   /// A safety bound: after this many contacts the mission stops exploring (the map, the mesh and
   /// the report are kept) and ends Failed with the reason, instead of trying again, [1, 1000].
@@ -133,6 +136,9 @@ class Mission {
   /// After a collision on a motion in direction `sign` (+1 forward, -1 backward, 0 a rotation):
   /// records the contact point (none for a rotation) and backs off by contact_backoff_m.
   void escapeContact(int sign, const std::string& what);
+  /// The latest scan's obstacle point (body height band) nearest to the robot now, in its present
+  /// base_link, within contact_offset_m + 0.1 m and not behind (sign: +1 forward, -1 backward); none: nullopt.
+  std::optional<Eigen::Vector2d> touchedPoint(int sign) const;
   /// Books a motion's result into the state: modelled time, odometry, true clearance (leg: a
   /// forward motion).
   void noteMotion(const MotionResult& r, bool leg);
