@@ -23,7 +23,8 @@ junit() {  # junit NAME OK(0/1) MESSAGE-FILE: one JUnit test case for a pipeline
     echo "  <testcase classname=\"pipeline\" name=\"$name\">"
     if [[ $ok -eq 0 ]]; then
       echo "    <failure message=\"$name failed\"><![CDATA["
-      [[ -n "$msgfile" && -f "$msgfile" ]] && tail -c 20000 "$msgfile" | sed 's/]]>/]] >/g'
+      # (control characters such as a terminal's escape codes are not allowed in XML 1.0: dropped)
+      [[ -n "$msgfile" && -f "$msgfile" ]] && tail -c 20000 "$msgfile" | tr -d '\000-\010\013\014\016-\037' | sed 's/]]>/]] >/g'
       echo "]]></failure>"
     fi
     echo "  </testcase>"
