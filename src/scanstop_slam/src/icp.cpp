@@ -789,7 +789,7 @@ void summarize(IcpResult& result, const PlaneEquations& e, bool six_dof, double 
 }  // namespace
 
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
-              const IcpConfig& config, const Eigen::Vector3f* source_origin) {
+              const IcpConfig& config, const Eigen::Vector3f* source_origin, const Eigen::Isometry3d* prior) {
   IcpResult result;
   Eigen::Isometry3d T = T_init;
   const long n = static_cast<long>(source.size());
@@ -875,13 +875,15 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   pairs.final(T, sum2, count);
   PlaneEquations final_eq = planeEquations(source, pairs, T, skip_horizontal);
   summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
-  if (!plane && result.converged && config.degeneracy_remap && result.weak_directions > 0) {
-    // Point-to-point moved along weak directions as freely as along the others: undo that. The
-    // correction, taken at the result (T^-1 T_init, the pose parameters of IcpConfig at T, where
-    // the information matrix was evaluated), goes back to the initial guess along the weak
-    // eigenvectors (normalized parameters); the well-constrained part of the result stays.
+  if ((!plane || prior) && result.converged && config.degeneracy_remap && result.weak_directions > 0) {
+    // Point-to-point moved along weak directions as freely as along the others (and an earlier
+    // stage, given as prior, may have): undo that. The correction, taken at the result (T^-1 keep,
+    // the pose parameters of IcpConfig at T, where the information matrix was evaluated), goes back
+    // to the guess along the weak eigenvectors (normalized parameters); the well-constrained part
+    // of the result stays.
+    const Eigen::Isometry3d& keep = prior ? *prior : T_init;
     const Spectrum s = spectrum(final_eq, config.six_dof, config.degeneracy_ratio);
-    const Eigen::VectorXd back = s.A.inverse() * reduce(params(T.inverse() * T_init), config.six_dof);
+    const Eigen::VectorXd back = s.A.inverse() * reduce(params(T.inverse() * keep), config.six_dof);
     Eigen::VectorXd weak_part = Eigen::VectorXd::Zero(back.size());
     for (int k = 0; k < s.weak; ++k) weak_part += s.vectors.col(k) * s.vectors.col(k).dot(back);
     T = T * fromParams(expand(s.A * weak_part, config.six_dof));

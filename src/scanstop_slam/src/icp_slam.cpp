@@ -151,7 +151,11 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
     coarse_iterations = c.iterations;
     if (c.converged) from = c.T_target_source;
   }
-  IcpResult result = icp(target, source, from, config_.icp, &origin);
+  // Every stage after the coarse one keeps the initial guess (the odometry prior), not the coarse
+  // stage's result, along the weak directions of its own final pairs: the coarse stage's far pairs
+  // must not slide a scan along a corridor (office_loop seed 1 scan 121: 4 cm off from odometry,
+  // 16 cm after a coarse slide the fine pairs could not see).
+  IcpResult result = icp(target, source, from, config_.icp, &origin, &start);
   result.iterations += coarse_iterations;
   if (result.converged && config_.refine_t_c_m > 0.0) {
     IcpConfig refine = config_.icp;
@@ -159,7 +163,7 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
     refine.t_c_m = config_.refine_t_c_m;
     refine.r_c_rad = config_.refine_r_c_rad;
     refine.max_iterations = config_.refine_max_iterations;
-    IcpResult refined = icp(target, refineSource(source), result.T_target_source, refine, &origin);
+    IcpResult refined = icp(target, refineSource(source), result.T_target_source, refine, &origin, &start);
     // Not settled within its iterations, or moved farther than a bias can be: the thesis stage's
     // result stands.
     const Eigen::Isometry3d moved = result.T_target_source.inverse() * refined.T_target_source;

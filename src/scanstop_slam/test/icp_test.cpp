@@ -909,6 +909,30 @@ TEST(IcpDegeneracy, InACorridorTheUpdateAlongTheAxisKeepsThePrior) {
   }
 }
 
+TEST(IcpDegeneracy, ALaterStageKeepsTheFirstGuessAlongTheAxisNotTheEarlierStagesSlide) {
+  // A stage that starts where an earlier one slid along the corridor (here 0.25 m past the
+  // odometry guess) keeps the guess given as prior along the weak axis, and fixes y and yaw; without
+  // the prior it keeps its own start (office_loop seed 1 scan 121: 16 cm after the coarse stage's
+  // slide, 3.8 cm with the prior).
+  std::mt19937 rng(29);
+  VoxelMap map(0.3, 100);
+  map.add(straightCorridor(rng, -15.0f, 15.0f, 300000, 0.001f));
+  const std::vector<Eigen::Vector3f> scan = straightCorridor(rng, -4.0f, 4.0f, 40000, 0.001f);
+  const Eigen::Isometry3d guess = pose(0.05, 0.05, 0, 0, 0, 1.0 * M_PI / 180);
+  const Eigen::Isometry3d slid = pose(0.30, 0.04, 0, 0, 0, 0.8 * M_PI / 180);
+  for (const IcpMethod method : {IcpMethod::point_to_point, IcpMethod::point_to_plane}) {
+    const IcpConfig c = corridorConfig(method, false, true);
+    const IcpResult kept = icp(map, scan, slid, c, nullptr, &guess);
+    const IcpResult own = icp(map, scan, slid, c);
+    ASSERT_TRUE(kept.converged && own.converged) << kept.failure << own.failure;
+    EXPECT_TRUE(kept.degenerate);
+    EXPECT_NEAR(kept.T_target_source.translation().x(), 0.05, 0.002) << toString(method);
+    EXPECT_NEAR(kept.T_target_source.translation().y(), 0.0, 0.001) << toString(method);
+    EXPECT_NEAR(yawOf(kept.T_target_source) * 180 / M_PI, 0.0, 0.01) << toString(method);
+    EXPECT_NEAR(own.T_target_source.translation().x(), 0.30, 0.002) << toString(method);  // its own start
+  }
+}
+
 TEST(IcpDegeneracy, AtTheMappedEndOfACorridorPointToPlaneKeepsThePriorWherePointToPointSlides) {
   // The robot stands 3 m before the end of the mapped 30 m (x = 12) and sees 5 m on into the
   // corridor's unmapped part: point-to-point pairs the scan points past the map's end with its edge

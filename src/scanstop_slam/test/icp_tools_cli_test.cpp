@@ -200,3 +200,33 @@ TEST(IcpReplayCli, ABadTruthFileIsNamed) {
   EXPECT_EQ(r.status, 0) << r.out;
   EXPECT_NE(r.out.find("error, odometry"), std::string::npos) << r.out;
 }
+
+// --isolated: each scan alone from the true pose before plus the odometry leg; --from N registers only
+// scans N on. The scans all see the same room from the same place (true poses 0), odometry says
+// 5 cm per scan: every registration comes back to the truth from a guess 5 cm off.
+TEST(IcpReplayCli, IsolatedRegistersEachScanAloneAndFromSkipsTheEarlierOnes) {
+  TempDir tmp;
+  const std::string map = makeMap(tmp.file("map"), 4);
+  std::string truth = "scans:\n";
+  for (int i = 0; i < 4; ++i) truth += "  - index: " + std::to_string(i) + "\n    true_pose: [0, 0, 0]\n";
+  writeFileAtomic(tmp.file("truth.yaml"), truth);
+  CliRun r = run(kReplay + " " + map + " --isolated odometry");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.out.find("--isolated needs --truth"), std::string::npos) << r.out;
+  r = run(kReplay + " " + map + " --truth " + tmp.file("truth.yaml") + " --isolated odometry");
+  ASSERT_EQ(r.status, 0) << r.out;
+  for (const char* line : {"scan   1: ok", "scan   2: ok", "scan   3: ok", "guess off   5.0 cm",
+                           "isolated registrations from the odometry leg over 3 scans"})
+    EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
+  const size_t max_at = r.out.find("max ", r.out.find("isolated registrations"));
+  ASSERT_NE(max_at, std::string::npos) << r.out;
+  EXPECT_LT(std::stod(r.out.substr(max_at + 4)), 1.0) << r.out;  // cm: back at the truth
+  r = run(kReplay + " " + map + " --truth " + tmp.file("truth.yaml") + " --isolated truth --from 3");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.find("scan   1:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("scan   3: ok"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("isolated registrations from the true pose over 1 scans"), std::string::npos) << r.out;
+  r = run(kReplay + " " + map + " --truth " + tmp.file("truth.yaml") + " --from 3");
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_NE(r.out.find("--from needs --isolated"), std::string::npos) << r.out;
+}

@@ -28,7 +28,7 @@ constexpr const char* kUsage =
     "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof] [--skip-bad]\n"
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
     "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--odom-scale-min-travel M]\n"
-    "                  [--coarse-point-to-plane] [--isolated odometry|truth]\n"
+    "                  [--coarse-point-to-plane] [--isolated odometry|truth [--from N]]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
@@ -40,7 +40,8 @@ constexpr const char* kUsage =
     "  --isolated: (with --truth) register every scan alone against the earlier scans at their true\n"
     "              poses, from the true pose of the scan before composed with the odometry leg\n"
     "              (odometry) or from its own true pose (truth), and print each registration's error:\n"
-    "              the error of one registration, without the drift before it\n"
+    "              the error of one registration, without the drift before it; --from N: only scans\n"
+    "              N on are registered (the earlier ones only enter the map)\n"
     "  --skip-bad: replay the good scans of a map with bad lines or scan files (each named on stderr);\n"
     "              default: refuse such a map, naming the first problem\n"
     "  numbers are checked against the ranges of the SLAM configuration (an error names option, value and range)\n"
@@ -89,7 +90,7 @@ double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAn
 
 /// --isolated: every scan registered alone against the earlier scans at their true poses.
 int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2D>>& truth, const slam::SlamConfig& config,
-                   bool from_truth, size_t max_scans, bool quiet) {
+                   bool from_truth, size_t max_scans, size_t from, bool quiet) {
   const slam::IcpSlam slam(config);
   slam::VoxelMap map(config.icp.c_max_m, config.max_points_per_voxel, config.map_spacing_m);
   const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
@@ -101,7 +102,7 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
     const std::optional<Pose2D> t = info.index < truth.size() ? truth[info.index] : std::nullopt;
     if (!t) continue;
     const PointCloud scan = in.loadScan(i);
-    if (prev) {
+    if (prev && i >= from) {
       const MapScanInfo& before = in.scans()[*prev];
       const Pose2D guess = from_truth ? *t : *truth[before.index] * before.odom_pose.between(info.odom_pose);
       const slam::Registration r = slam.registerAgainst(map, scan, guess, info.sensor_origin);
@@ -145,7 +146,7 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
 int main(int argc, char** argv) {
   std::string map_dir, out_dir, truth_path, isolated, mode = "3dof", method = slam::toString(slam::SlamConfig().icp.method);
   bool quiet = false, skip_bad = false;
-  size_t max_scans = 0;
+  size_t max_scans = 0, isolated_from = 0;
   slam::SlamConfig config;
   const double deg = M_PI / 180.0;
   Options opts("icp_replay", kUsage);
@@ -177,6 +178,7 @@ int main(int argc, char** argv) {
       .integer("--max-iterations", config.icp.max_iterations, 1, 10000)
       .integer("--max-points-per-voxel", config.max_points_per_voxel, 1, 100000)
       .integer("--scans", max_scans, size_t{0}, size_t{10000000})
+      .integer("--from", isolated_from, size_t{0}, size_t{10000000})
       .real("--source-voxel", config.source_voxel_m, 0.0, 1.0)
       .real("--map-spacing", config.map_spacing_m, 0.0, 5.0)
       .flag("--quiet", quiet)
@@ -207,12 +209,16 @@ int main(int argc, char** argv) {
         openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "icp_replay: warning: " << w << "\n"; });
     std::vector<std::optional<Pose2D>> truth;
     if (!truth_path.empty()) truth = readTruth(truth_path);
+    if (isolated_from > 0 && isolated.empty()) {
+      std::cerr << "icp_replay: --from needs --isolated (a full replay registers every scan)\n";
+      return kExitUsage;
+    }
     if (!isolated.empty()) {
       if (truth.empty()) {
         std::cerr << "icp_replay: --isolated needs --truth (the true poses to build the map from)\n";
         return kExitUsage;
       }
-      return replayIsolated(in, truth, config, isolated == "truth", max_scans, quiet);
+      return replayIsolated(in, truth, config, isolated == "truth", max_scans, isolated_from, quiet);
     }
     slam::IcpSlam slam(config, out_dir);
     if (slam.scanCount() != 0) throw IoError(out_dir, "already holds scans; give an empty or new --out directory");

@@ -225,8 +225,13 @@ struct IcpResult {
 
 /// Registers source points (in their own frame) to the map, starting at T_init (source -> map).
 /// source_origin: where the source points were seen from (their frame), for IcpConfig::same_side.
+/// prior: with degeneracy_remap, the pose kept along the result's weak directions (default: T_init).
+/// A stage that starts from an earlier stage's result passes the first stage's guess (the odometry
+/// prior), so that no stage slides along a direction the final pairs cannot fix: both methods then
+/// project the whole correction prior^-1 T back onto the well-constrained directions at the end.
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
-              const IcpConfig& config, const Eigen::Vector3f* source_origin = nullptr);
+              const IcpConfig& config, const Eigen::Vector3f* source_origin = nullptr,
+              const Eigen::Isometry3d* prior = nullptr);
 
 /// Keeps one point per voxel (the first); voxel_m <= 0 returns the finite points unchanged.
 std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m);
