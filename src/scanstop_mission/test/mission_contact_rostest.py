@@ -12,33 +12,22 @@ import json
 import math
 import os
 import re
-import shutil
 import sys
-import tempfile
-import unittest
 
 import rospy
 import yaml
 from scanstop_msgs.srv import AddHiddenObstacle
 
-from scanstop_system import System, check_every_scan_once
+from scanstop_system import SystemTestCase, check_every_scan_once
 
 PKG = "scanstop_mission"
 BUDGET = 6
 AHEAD_M, RADIUS_M = 0.7, 0.1
 
 
-class MissionContact(unittest.TestCase):
-    def setUp(self):
-        self.run_dir = tempfile.mkdtemp(prefix="scanstop_contact_rostest_")
-        self.system = System(self.run_dir, planes=50, budget=BUDGET, world="room_10x8", seed=3)
-
-    def tearDown(self):
-        self.system.stop_all()
-        if os.environ.get("MISSION_KEEP_RUN_DIR"):
-            print("run directory kept:", self.run_dir)
-        else:
-            shutil.rmtree(self.run_dir, ignore_errors=True)
+class MissionContact(SystemTestCase):
+    RUN_DIR_PREFIX = "scanstop_contact_rostest_"
+    SYSTEM_ARGS = dict(planes=50, budget=BUDGET, world="room_10x8", seed=3)
 
     def test_back_off_and_never_touch_the_spot_again(self):
         self.system.start("sim")

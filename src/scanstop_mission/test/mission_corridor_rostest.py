@@ -13,30 +13,21 @@ parameters to icp_slam_node, to compare settings on the same mission.
 """
 import json
 import os
-import shutil
 import sys
-import tempfile
-import unittest
 
-from scanstop_system import System, check_every_scan_once
+from scanstop_system import SystemTestCase, check_every_scan_once
 
 PKG = "scanstop_mission"
 BUDGET = 14
 MAX_ATE_M = 0.05
 
 
-class MissionCorridor(unittest.TestCase):
-    def setUp(self):
-        self.run_dir = tempfile.mkdtemp(prefix="scanstop_corridor_rostest_")
-        self.system = System(self.run_dir, planes=400, budget=BUDGET, world="corridor", seed=1,
-                             slam_args=os.environ.get("MISSION_SLAM_ARGS", "").split())
+class MissionCorridor(SystemTestCase):
+    RUN_DIR_PREFIX = "scanstop_corridor_rostest_"
+    SYSTEM_ARGS = dict(planes=400, budget=BUDGET, world="corridor", seed=1)
 
-    def tearDown(self):
-        self.system.stop_all()
-        if os.environ.get("MISSION_KEEP_RUN_DIR"):
-            print("run directory kept:", self.run_dir)
-        else:
-            shutil.rmtree(self.run_dir, ignore_errors=True)
+    def system_args(self):
+        return dict(self.SYSTEM_ARGS, slam_args=os.environ.get("MISSION_SLAM_ARGS", "").split())
 
     def test_every_scan_close_to_the_truth(self):
         system = self.system

@@ -8,29 +8,17 @@ the body along every driven leg is measured and reported (summary.json's min_cle
 legs_measured) and stays above zero.
 """
 import json
-import os
-import shutil
 import sys
-import tempfile
-import unittest
 
-from scanstop_system import System, check_every_scan_once
+from scanstop_system import SystemTestCase, check_every_scan_once
 
 PKG = "scanstop_mission"
 BUDGET = 8
 
 
-class MissionFurnished(unittest.TestCase):
-    def setUp(self):
-        self.run_dir = tempfile.mkdtemp(prefix="scanstop_furnished_rostest_")
-        self.system = System(self.run_dir, planes=50, budget=BUDGET, world="furnished_1")
-
-    def tearDown(self):
-        self.system.stop_all()
-        if os.environ.get("MISSION_KEEP_RUN_DIR"):
-            print("run directory kept:", self.run_dir)
-        else:
-            shutil.rmtree(self.run_dir, ignore_errors=True)
+class MissionFurnished(SystemTestCase):
+    RUN_DIR_PREFIX = "scanstop_furnished_rostest_"
+    SYSTEM_ARGS = dict(planes=50, budget=BUDGET, world="furnished_1")
 
     def test_no_contact_and_clearance_reported(self):
         system = self.system

@@ -9,28 +9,17 @@ report, and a SLAM pose error well below odometry's.
 """
 import json
 import os
-import shutil
 import sys
-import tempfile
-import unittest
 
-from scanstop_system import System, check_every_scan_once
+from scanstop_system import SystemTestCase, check_every_scan_once
 
 PKG = "scanstop_mission"
 BUDGET = 6
 
 
-class MissionInSim(unittest.TestCase):
-    def setUp(self):
-        self.run_dir = tempfile.mkdtemp(prefix="scanstop_mission_rostest_")
-        self.system = System(self.run_dir, planes=50, budget=BUDGET)  # sim_node comes from mission_sim.test
-
-    def tearDown(self):
-        self.system.stop_all()
-        if os.environ.get("MISSION_KEEP_RUN_DIR"):
-            print("run directory kept:", self.run_dir)
-        else:
-            shutil.rmtree(self.run_dir, ignore_errors=True)
+class MissionInSim(SystemTestCase):
+    RUN_DIR_PREFIX = "scanstop_mission_rostest_"
+    SYSTEM_ARGS = dict(planes=50, budget=BUDGET)  # sim_node comes from mission_sim.test
 
     def wait_for_scans(self, n, timeout):
         if not self.system.wait_for_scans(n, timeout):

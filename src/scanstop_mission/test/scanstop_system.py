@@ -7,9 +7,12 @@ Used by mission_sim_rostest.py (crashes) and mission_chaos_rostest.py (seeded ki
 import csv
 import json
 import os
+import shutil
 import signal
 import subprocess
+import tempfile
 import time
+import unittest
 
 import yaml
 
@@ -131,6 +134,28 @@ class System(object):
         for name in list(self.procs):
             if self.alive(name):
                 self.kill(name)
+
+
+class SystemTestCase(unittest.TestCase):
+    """A test case on one simulated system: setUp makes a fresh run directory (RUN_DIR_PREFIX) and
+    the System of system_args() (SYSTEM_ARGS: System's keyword arguments); tearDown stops every node
+    and removes the run directory (kept, and named, with MISSION_KEEP_RUN_DIR set)."""
+    RUN_DIR_PREFIX = "scanstop_rostest_"
+    SYSTEM_ARGS = {}
+
+    def system_args(self):
+        return dict(self.SYSTEM_ARGS)
+
+    def setUp(self):
+        self.run_dir = tempfile.mkdtemp(prefix=self.RUN_DIR_PREFIX)
+        self.system = System(self.run_dir, **self.system_args())
+
+    def tearDown(self):
+        self.system.stop_all()
+        if os.environ.get("MISSION_KEEP_RUN_DIR"):
+            print("run directory kept:", self.run_dir)
+        else:
+            shutil.rmtree(self.run_dir, ignore_errors=True)
 
 
 def check_every_scan_once(test, run_dir, budget):
