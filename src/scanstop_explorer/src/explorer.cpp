@@ -124,11 +124,11 @@ void Explorer::blacklist(const Eigen::Vector2d& center_map, double radius_m) {
   blacklist_.emplace_back(center_map, radius_m);
 }
 
-bool Explorer::addContact(const Eigen::Vector2d& point_map) {
-  if (!point_map.allFinite()) return false;
+bool Explorer::addContact(const Eigen::Vector2d& point_map, double radius_m) {
+  if (!point_map.allFinite() || !std::isfinite(radius_m) || radius_m < 0.0) return false;
   for (const auto& c : contacts_)
-    if ((c - point_map).norm() < 0.01) return false;
-  contacts_.push_back(point_map);
+    if ((c.first - point_map).norm() < 0.01) return false;
+  contacts_.emplace_back(point_map, radius_m > 0.0 ? radius_m : config_.contact_radius_m);
   return true;
 }
 
@@ -147,9 +147,9 @@ PlanResult Explorer::plan(const Pose2D& T_map_base, const std::optional<Eigen::V
   input.states = floor_.states();
   input.geometry = floor_.geometry();
   // Contacts: obstacles whatever the scans show (what the robot touched was not seen well).
-  for (const Eigen::Vector2d& c : contacts_) {
+  for (const auto& [c, radius] : contacts_) {
     const cv::Point cell = input.geometry.cellOf(c.x(), c.y());
-    const int r = std::max(1, static_cast<int>(std::lround(config_.contact_radius_m / input.geometry.resolution)));
+    const int r = std::max(1, static_cast<int>(std::lround(radius / input.geometry.resolution)));
     if (!input.states.empty()) cv::circle(input.states, cell, r, cv::Scalar(kObstacle), cv::FILLED);
   }
   input.scan_positions = scanPositions();

@@ -152,6 +152,16 @@ std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, cons
     out << "contacts has " << req.contacts.size() << " points, more than max_unreachable " << c.max_unreachable;
     return out.str();
   }
+  if (!req.contact_radii.empty() && req.contact_radii.size() != req.contacts.size()) {
+    out << "contact_radii has " << req.contact_radii.size() << " values for " << req.contacts.size()
+        << " contacts (empty, or one per contact)";
+    return out.str();
+  }
+  for (size_t i = 0; i < req.contact_radii.size(); ++i)
+    if (!std::isfinite(req.contact_radii[i]) || req.contact_radii[i] < 0.0 || req.contact_radii[i] > 2.0) {
+      out << "contact_radii[" << i << "] " << req.contact_radii[i] << " m is not in [0, 2] (0: contact_radius_m)";
+      return out.str();
+    }
   for (const auto* list : {&req.unreachable, &req.contacts}) {
     const char* name = list == &req.unreachable ? "unreachable" : "contacts";
     for (size_t i = 0; i < list->size(); ++i) {
@@ -265,9 +275,13 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
   for (const geometry_msgs::Point& u : req.unreachable)
     if (explorer_->markUnreachable(Eigen::Vector2d(u.x, u.y)))
       ROS_INFO("explorer_node: target (%.2f, %.2f) blacklisted as unreachable by the caller", u.x, u.y);
-  for (const geometry_msgs::Point& p : req.contacts)
-    if (explorer_->addContact(Eigen::Vector2d(p.x, p.y)))
-      ROS_WARN("explorer_node: contact at (%.2f, %.2f) reported by the caller: an obstacle from now on", p.x, p.y);
+  for (size_t i = 0; i < req.contacts.size(); ++i) {
+    const geometry_msgs::Point& p = req.contacts[i];
+    const double radius = i < req.contact_radii.size() ? req.contact_radii[i] : 0.0;
+    if (explorer_->addContact(Eigen::Vector2d(p.x, p.y), radius))
+      ROS_WARN("explorer_node: contact at (%.2f, %.2f) reported by the caller: an obstacle disc of %.2f m from now on",
+               p.x, p.y, explorer_->contacts().back().second);
+  }
   const PlanResult r =
       explorer_->plan(robot, req.to_goal ? std::optional<Eigen::Vector2d>(Eigen::Vector2d(req.goal.x, req.goal.y))
                                          : std::nullopt);

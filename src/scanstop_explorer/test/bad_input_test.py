@@ -120,6 +120,12 @@ class ExplorerBadInput(unittest.TestCase):
             ('too many unreachable points',
              PlanNextRequest(map_pose=pose(1.5, 2.0), unreachable=[Point(target.x, target.y, 0.0)] * 10001),
              'more than max_unreachable'),
+            ('contact radii that do not match the contacts',
+             PlanNextRequest(map_pose=pose(1.5, 2.0), contacts=[Point(0.5, 0.5, 0.0)], contact_radii=[0.05, 0.05]),
+             'contact_radii has 2 values for 1 contacts'),
+            ('a negative contact radius',
+             PlanNextRequest(map_pose=pose(1.5, 2.0), contacts=[Point(0.5, 0.5, 0.0)], contact_radii=[-0.1]),
+             'contact_radii[0] -0.1 m is not in [0, 2]'),
         ]
         for what, req, text in bad:
             r = self.plan(req)

@@ -290,7 +290,9 @@ TEST(Explorer, AContactIsAnObstacleNoLaterPathPasses) {
   EXPECT_TRUE(ex.addContact(contact));
   EXPECT_FALSE(ex.addContact(contact + Eigen::Vector2d(0.005, 0.0)));  // the caller's whole list again
   EXPECT_FALSE(ex.addContact(Eigen::Vector2d(std::nan(""), 0.0)));
+  EXPECT_FALSE(ex.addContact(contact + Eigen::Vector2d(1.0, 0.0), -0.1));
   ASSERT_EQ(ex.contacts().size(), 1u);
+  EXPECT_DOUBLE_EQ(ex.contacts()[0].second, ex.config().contact_radius_m);  // 0: the configured radius
   const PlanResult b = ex.plan(Pose2D(1.0, 1.0, 0.0));
   ASSERT_TRUE(b.success && !b.complete) << b.message;
   ASSERT_GE(b.path.size(), 2u);
@@ -302,6 +304,31 @@ TEST(Explorer, AContactIsAnObstacleNoLaterPathPasses) {
     const double t = std::clamp((contact - p).dot(q - p) / std::max(1e-12, (q - p).squaredNorm()), 0.0, 1.0);
     EXPECT_GT((p + t * (q - p) - contact).norm(), ex.config().planner.robot_radius_m) << "leg " << i;
   }
+}
+
+TEST(Explorer, AContactWithItsOwnRadiusBlocksOnlyItsDisc) {
+  // A contact located at a scanned point comes with a small disc: the inflated obstacle stays
+  // that small, so that a passage beside it stays open (a door jamb touched on the way home).
+  const test::Scene s = test::twoRooms();
+  Explorer ex;
+  ex.addScan(0, Pose2D(1.0, 1.0, 0.0), test::simulateScan(s, {1.0, 1.0}, 3.0));
+  const Eigen::Vector2d contact(1.0, 1.8);
+  ASSERT_TRUE(ex.addContact(contact, 0.05));
+  ASSERT_TRUE(ex.addContact(Eigen::Vector2d(2.0, 0.4)));
+  ASSERT_EQ(ex.contacts().size(), 2u);
+  EXPECT_DOUBLE_EQ(ex.contacts()[0].second, 0.05);
+  EXPECT_DOUBLE_EQ(ex.contacts()[1].second, ex.config().contact_radius_m);
+  const PlanResult b = ex.plan(Pose2D(1.0, 1.0, 0.0));
+  ASSERT_TRUE(b.success) << b.message;
+  const double res = b.geometry.resolution;
+  // Inside the small disc: obstacle; 0.1 m from it (inside the default disc): not.
+  EXPECT_EQ(b.states.at<uint8_t>(b.geometry.cellOf(contact.x(), contact.y())), kObstacle);
+  EXPECT_NE(b.states.at<uint8_t>(b.geometry.cellOf(contact.x() + 0.1, contact.y())), kObstacle);
+  EXPECT_EQ(b.states.at<uint8_t>(b.geometry.cellOf(2.0 + 0.1, 0.4)), kObstacle);
+  // Accessible again just beyond the small disc plus the robot radius.
+  const double clear = 0.05 + ex.config().planner.robot_radius_m + 1.5 * res;  // < contact_radius_m + robot radius
+  EXPECT_EQ(b.accessible.at<uint8_t>(b.geometry.cellOf(contact.x() + clear, contact.y())), 1)
+      << "a small contact disc closes more than itself plus the robot radius";
 }
 
 TEST(Explorer, ProgressTowardsTheTargetIsNotAFailure) {

@@ -44,6 +44,7 @@ void MissionConfig::validate() const {
   requireInRange("contact_backoff", contact_backoff_m, 0.0, 1.0, "m");
   requireInRange("contact_offset", contact_offset_m, 0.0, 2.0, "m");
   requireInRange("max_contacts", max_contacts, 1, 1000);
+  requireInRange("contact_point_radius", contact_point_radius_m, 1e-3, 2.0, "m");
   requireInRange("leg_check_radius", leg_check_radius_m, 1e-3, 2.0, "m");
   requireInRange("leg_check_margin", leg_check_margin_m, 0.0, 1.0, "m");
   requireInRange("leg_check_min_z", leg_check_min_z_m, -1.0, 5.0, "m");
@@ -493,12 +494,14 @@ void Mission::escapeContact(int sign, const std::string& what) {
     // What the body touched: the latest scan's point in the body's height band nearest to the robot,
     // within contact_offset + 0.1 m of its centre and not behind the way it drove (a door jamb beside the
     // robot stays a jamb: a disc straight ahead would close the door); else contact_offset ahead.
-    Eigen::Vector2d contact(est.x + sign * config_.contact_offset_m * std::cos(est.yaw),
-                            est.y + sign * config_.contact_offset_m * std::sin(est.yaw));
+    Contact contact;  // radius 0: the explorer's contact_radius_m
+    contact.point = Eigen::Vector2d(est.x + sign * config_.contact_offset_m * std::cos(est.yaw),
+                                    est.y + sign * config_.contact_offset_m * std::sin(est.yaw));
     std::string where = "ahead";
     if (const std::optional<Eigen::Vector2d> touched = touchedPoint(sign)) {
-      contact = est.transformPoint(*touched);
-      where = "at the nearest point of the latest scan";
+      contact.point = est.transformPoint(*touched);
+      contact.radius_m = config_.contact_point_radius_m;
+      where = "at the nearest point of the latest scan, disc " + fmt(contact.radius_m) + " m";
     }
     size_t n = 0;
     {
@@ -507,7 +510,7 @@ void Mission::escapeContact(int sign, const std::string& what) {
       n = state_.contacts.size();
     }
     event("contact " + std::to_string(n) + " of at most " + std::to_string(config_.max_contacts) + " at (" +
-              fmt(contact.x()) + ", " + fmt(contact.y()) + ") on a " + what + " (" + where +
+              fmt(contact.point.x()) + ", " + fmt(contact.point.y()) + ") on a " + what + " (" + where +
               "): an obstacle for every later plan",
           true);
   }

@@ -91,6 +91,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "contact_backoff", config_.contact_backoff_m);
   ros_params::optional(pnh, "contact_offset", config_.contact_offset_m);
   ros_params::optional(pnh, "max_contacts", config_.max_contacts);
+  ros_params::optional(pnh, "contact_point_radius", config_.contact_point_radius_m);
   ros_params::optional(pnh, "leg_check", config_.leg_check);
   // The swept disc and the heights of the leg check come from the body (robot_body/...,
   // config/robot_body.yaml): radius + leg_check_body_margin, up to the body's height.
@@ -165,7 +166,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   // A misspelt parameter would silently keep its default: refuse it.
   const std::vector<std::string> unknown = ros_params::unknownParameters(
       pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
-            "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
+            "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts", "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
             "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
@@ -175,7 +176,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
     throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
                       "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, return_home, home_tolerance, home_scan_travel, "
-                      "contact_backoff, contact_offset, max_contacts, leg_check, leg_check_radius, leg_check_body_margin, leg_check_margin, leg_check_min_z, "
+                      "contact_backoff, contact_offset, max_contacts, contact_point_radius, leg_check, leg_check_radius, leg_check_body_margin, leg_check_margin, leg_check_min_z, "
                       "leg_check_max_z, leg_check_self, leg_check_min_points, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
                       "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns, run_identity, "

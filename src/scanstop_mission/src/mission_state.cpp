@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <stdexcept>
 
 #include "scanstop_common/error.h"
@@ -101,8 +102,9 @@ void MissionState::save(const std::string& path) const {
   for (const auto& c : contacts) {
     YAML::Node n(YAML::NodeType::Sequence);
     n.SetStyle(YAML::EmitterStyle::Flow);
-    n.push_back(c.x());
-    n.push_back(c.y());
+    n.push_back(c.point.x());
+    n.push_back(c.point.y());
+    n.push_back(c.radius_m);
     contact_list.push_back(n);
   }
   root["contacts"] = contact_list;
@@ -173,7 +175,17 @@ MissionState MissionState::load(const std::string& path) {
       throw std::runtime_error("path_next " + std::to_string(m.path_next) + " is outside the path of " +
                                std::to_string(m.path.size()) + " waypoints");
     for (const YAML::Node& n : root["unreachable"]) m.unreachable.emplace_back(n[0].as<double>(), n[1].as<double>());
-    for (const YAML::Node& n : root["contacts"]) m.contacts.emplace_back(n[0].as<double>(), n[1].as<double>());
+    for (const YAML::Node& n : root["contacts"]) {  // [x, y, radius]; files before the radius: [x, y]
+      Contact contact;
+      contact.point = Eigen::Vector2d(n[0].as<double>(), n[1].as<double>());
+      contact.radius_m = n.size() > 2 ? n[2].as<double>() : 0.0;
+      if (!contact.point.allFinite() || !std::isfinite(contact.radius_m) || contact.radius_m < 0.0 ||
+          contact.radius_m > 2.0)
+        throw std::runtime_error("contact (" + std::to_string(contact.point.x()) + ", " +
+                                 std::to_string(contact.point.y()) + ") radius " + std::to_string(contact.radius_m) +
+                                 " is not finite or not in [0, 2] m");
+      m.contacts.push_back(contact);
+    }
     m.clearance_motions = root["clearance_motions"].as<int>(0);
     m.clearance_legs = root["clearance_legs"].as<int>(0);
     m.close_legs = root["close_legs"].as<int>(0);

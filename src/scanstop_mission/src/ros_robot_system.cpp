@@ -246,7 +246,7 @@ MotionResult RosRobotSystem::forward(double distance_m) {
 }
 
 PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
-                                    const std::vector<Eigen::Vector2d>& contacts,
+                                    const std::vector<Contact>& contacts,
                                     const std::optional<Eigen::Vector2d>& goal) {
   PlanResult r;
   scanstop_msgs::PlanNext srv;
@@ -257,11 +257,12 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
     p.y = u.y();
     srv.request.unreachable.push_back(p);
   }
-  for (const auto& c : contacts) {
+  for (const Contact& c : contacts) {
     geometry_msgs::Point p;
-    p.x = c.x();
-    p.y = c.y();
+    p.x = c.point.x();
+    p.y = c.point.y();
     srv.request.contacts.push_back(p);
+    srv.request.contact_radii.push_back(c.radius_m);
   }
   if (goal) {
     srv.request.to_goal = true;

@@ -70,7 +70,8 @@ class MissionContact(SystemTestCase):
         sx, sy, syaw = (float(v) for v in start)
         mx = math.cos(-syaw) * (hx - sx) - math.sin(-syaw) * (hy - sy)
         my = math.sin(-syaw) * (hx - sx) + math.cos(-syaw) * (hy - sy)
-        cx, cy = state["contacts"][0]
+        cx, cy, radius = state["contacts"][0]
+        self.assertTrue(0.0 <= radius <= 2.0, state["contacts"])  # 0: the explorer's contact_radius_m
         self.assertLess(math.hypot(cx - mx, cy - my), 0.3, (state["contacts"], (mx, my)))
         # after the contact every motion kept clear: the smallest true clearance of the run is the contact's 0
         # and there was no second one; the legs measured go on after it

@@ -77,7 +77,7 @@ class FakeSystem : public RobotSystem {
   std::function<std::optional<double>(char, double)> clearance_of;
   bool scan_walls = false;  ///< the scans see the walls (points every 2 cm at 0.1-0.5 m height); else they do not
   std::vector<size_t> forwards_at_plan;           // forwards.size() at each plan
-  std::vector<std::vector<Eigen::Vector2d>> plan_contacts;  // the contacts each plan was given
+  std::vector<std::vector<Contact>> plan_contacts;  // the contacts each plan was given
   int scans_taken = 0;
   std::function<void(int)> on_scan;               // called at every takeScan with the count so far
   std::string state_path;                         // checked at every scan: saved state has all scans
@@ -174,7 +174,7 @@ class FakeSystem : public RobotSystem {
   }
 
   PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
-                      const std::vector<Eigen::Vector2d>& contacts, const std::optional<Eigen::Vector2d>& goal) override {
+                      const std::vector<Contact>& contacts, const std::optional<Eigen::Vector2d>& goal) override {
     PlanResult r;
     plan_contacts.push_back(contacts);
     forwards_at_plan.push_back(forwards.size());
@@ -491,8 +491,9 @@ TEST(Mission, AfterAContactTheRobotBacksOffAndEveryLaterPlanKnowsTheContact) {
   EXPECT_EQ(s.collisions, 1);
   ASSERT_EQ(s.contacts.size(), 1u);
   // The fake stops 0.25 m short of the wall (x 1.25); the contact is contact_offset ahead: at the wall.
-  EXPECT_NEAR(s.contacts[0].x(), 1.25 * 1.03 + c.contact_offset_m, 0.1);
-  EXPECT_NEAR(s.contacts[0].y(), 0.0, 0.1);
+  EXPECT_NEAR(s.contacts[0].point.x(), 1.25 * 1.03 + c.contact_offset_m, 0.1);
+  EXPECT_NEAR(s.contacts[0].point.y(), 0.0, 0.1);
+  EXPECT_EQ(s.contacts[0].radius_m, 0.0);  // a guess: the explorer's own, larger disc
   // The motion right after the colliding one is the back-off.
   ASSERT_GE(sys.first_collision, 0);
   const size_t hit = static_cast<size_t>(sys.first_collision);
@@ -511,14 +512,16 @@ TEST(Mission, AfterAContactTheRobotBacksOffAndEveryLaterPlanKnowsTheContact) {
     }
     any_after = true;
     ASSERT_EQ(sys.plan_contacts[i].size(), 1u) << i;
-    EXPECT_TRUE(sys.plan_contacts[i][0].isApprox(s.contacts[0])) << i;
+    EXPECT_TRUE(sys.plan_contacts[i][0].point.isApprox(s.contacts[0].point)) << i;
+    EXPECT_EQ(sys.plan_contacts[i][0].radius_m, s.contacts[0].radius_m) << i;
   }
   EXPECT_TRUE(any_after);
   // Saved with the state: a resumed mission still knows it.
   Mission resumed(c, sys, quiet, quiet);
   resumed.loadSavedState();
   ASSERT_EQ(resumed.snapshot().contacts.size(), 1u);
-  EXPECT_TRUE(resumed.snapshot().contacts[0].isApprox(s.contacts[0]));
+  EXPECT_TRUE(resumed.snapshot().contacts[0].point.isApprox(s.contacts[0].point));
+  EXPECT_EQ(resumed.snapshot().contacts[0].radius_m, s.contacts[0].radius_m);
 }
 
 TEST(Mission, TheContactIsTheScannedPointTheBodyTouchedNotAlwaysStraightAhead) {
@@ -536,10 +539,19 @@ TEST(Mission, TheContactIsTheScannedPointTheBodyTouchedNotAlwaysStraightAhead) {
   m.run();
   const MissionState s = m.snapshot();
   ASSERT_GE(s.contacts.size(), 1u);
-  EXPECT_NEAR(s.contacts[0].x(), 1.5, 0.03);
-  EXPECT_NEAR(s.contacts[0].y(), 0.21, 0.08);
+  EXPECT_NEAR(s.contacts[0].point.x(), 1.5, 0.03);
+  EXPECT_NEAR(s.contacts[0].point.y(), 0.21, 0.08);
+  // Located, not guessed: its own small disc goes to the explorer, and survives a resume.
+  EXPECT_DOUBLE_EQ(s.contacts[0].radius_m, c.contact_point_radius_m);
+  ASSERT_FALSE(sys.plan_contacts.empty());
+  ASSERT_FALSE(sys.plan_contacts.back().empty());
+  EXPECT_DOUBLE_EQ(sys.plan_contacts.back()[0].radius_m, c.contact_point_radius_m);
+  Mission resumed(c, sys, quiet, quiet);
+  resumed.loadSavedState();
+  ASSERT_GE(resumed.snapshot().contacts.size(), 1u);
+  EXPECT_DOUBLE_EQ(resumed.snapshot().contacts[0].radius_m, c.contact_point_radius_m);
   bool logged = false;
-  for (const auto& e : s.events) logged = logged || e.what.find("(at the nearest point of the latest scan)") != std::string::npos;
+  for (const auto& e : s.events) logged = logged || e.what.find("(at the nearest point of the latest scan, disc 0.05 m)") != std::string::npos;
   EXPECT_TRUE(logged);
 }
 

@@ -32,8 +32,9 @@ struct ExplorerConfig {
   int max_failed_attempts = 2;        ///< plans without progress before a target is blacklisted, [1, 100]
   double blacklist_radius_m = 0.5;    ///< radius of the blacklisted disc around a failed target [m], (0, 10]
   /// A contact (where the robot touched something the scans did not show as an obstacle) becomes an
-  /// obstacle disc of this radius in every later plan; the planner's inflation by robot_radius_m
-  /// keeps every path off it [m], (0, 2]
+  /// obstacle disc of this radius in every later plan, unless the caller gives the contact its own
+  /// radius (the mission does for a contact located at a scanned point); the planner's inflation by
+  /// robot_radius_m keeps every path off it [m], (0, 2]
   double contact_radius_m = 0.15;
 
   /// Validates every field (ConfigError naming parameter, value and range).
@@ -84,11 +85,13 @@ class Explorer {
   /// that point is blacklisted already. Returns true when it was new.
   bool markUnreachable(const Eigen::Vector2d& target_map);
   const std::vector<std::pair<Eigen::Vector2d, double>>& blacklisted() const { return blacklist_; }
-  /// A point the robot touched (map frame): from now on an obstacle disc of contact_radius_m in the
-  /// floor grid of every plan, whatever the scans show there. Returns false (nothing changed) for a
-  /// non-finite point or one within 1 cm of a known contact.
-  bool addContact(const Eigen::Vector2d& point_map);
-  const std::vector<Eigen::Vector2d>& contacts() const { return contacts_; }
+  /// A point the robot touched (map frame): from now on an obstacle disc of radius_m (0:
+  /// contact_radius_m) in the floor grid of every plan, whatever the scans show there. Returns false
+  /// (nothing changed) for a non-finite point, a negative or non-finite radius, or a point within
+  /// 1 cm of a known contact.
+  bool addContact(const Eigen::Vector2d& point_map, double radius_m = 0.0);
+  /// The contacts with the radius of their discs [m].
+  const std::vector<std::pair<Eigen::Vector2d, double>>& contacts() const { return contacts_; }
 
   size_t scanCount() const { return scans_.size(); }
   bool hasScan(uint32_t index) const { return scans_.count(index) > 0; }
@@ -114,7 +117,7 @@ class Explorer {
   void addToFloor(const Scan& scan);
   std::map<uint32_t, Scan> scans_;
   std::vector<std::pair<Eigen::Vector2d, double>> blacklist_;
-  std::vector<Eigen::Vector2d> contacts_;
+  std::vector<std::pair<Eigen::Vector2d, double>> contacts_;  ///< (point [m], disc radius [m])
   Attempt last_;
 };
 

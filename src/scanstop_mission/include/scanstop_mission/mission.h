@@ -48,6 +48,11 @@ struct MissionConfig {
   /// radius plus a little) [m], [0, 2]. The point joins MissionState::contacts and every later plan
   /// as an obstacle.
   double contact_offset_m = 0.3;
+  /// Radius of the obstacle disc of a contact located at a scanned point (the point is known to
+  /// within the odometry since the scan: a few cm; the explorer inflates it by the robot's radius).
+  /// A contact placed contact_offset ahead is a guess and gets the explorer's contact_radius_m
+  /// (0.15 m). A large disc at a door jamb closes the door [m], (0, 2]
+  double contact_point_radius_m = 0.05;
   /// A safety bound: after this many contacts the mission stops exploring (the map, the mesh and
   /// the report are kept) and ends Failed with the reason, instead of trying again, [1, 1000].
   int max_contacts = 5;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "scanstop_common/pose.h"
+#include "scanstop_mission/robot_system.h"
 
 namespace scanstop {
 namespace mission {
@@ -45,7 +46,7 @@ struct MissionState {
   State state = State::Idle;
   std::vector<ScanRecord> scans;
   std::vector<Eigen::Vector2d> unreachable;  ///< targets the robot failed to reach (map frame)
-  std::vector<Eigen::Vector2d> contacts;     ///< where the robot touched something (map frame): obstacles
+  std::vector<Contact> contacts;             ///< where the robot touched something (map frame): obstacles
   // True clearance of the body (simulation): over every motion with a measurement.
   int clearance_motions = 0;                 ///< motions with a true clearance
   int clearance_legs = 0;                    ///< ... of them straight legs (forward motions)

@@ -22,6 +22,15 @@ struct StepResult {
   double wall_time_s = 0.0;   ///< wall-clock time the call took, measured by the caller [s]
 };
 
+/// Where the robot touched something the map did not show (map frame): an obstacle disc for every
+/// later plan.
+struct Contact {
+  Eigen::Vector2d point = Eigen::Vector2d::Zero();  ///< [m]
+  /// Radius of the obstacle disc [m]; 0: the explorer's own contact_radius_m (a contact whose place
+  /// is only guessed, ahead of the robot).
+  double radius_m = 0.0;
+};
+
 /// A 3D scan taken while the robot stands still.
 struct ScanResult : StepResult {
   Pose2D odom_pose;           ///< odometry pose of base_link at scan time (odom frame)
@@ -84,7 +93,7 @@ class RobotSystem {
   /// to the goal instead (PlanResult::complete still says whether exploration is complete).
   /// `contacts`: where the robot touched something (map frame): obstacles the plan must not pass.
   virtual PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
-                              const std::vector<Eigen::Vector2d>& contacts,
+                              const std::vector<Contact>& contacts,
                               const std::optional<Eigen::Vector2d>& goal) = 0;
   virtual MeshResult buildMesh(const std::string& output_path) = 0;
   /// The true pose in the map frame (simulation only), for the report; nullopt on a real robot.
