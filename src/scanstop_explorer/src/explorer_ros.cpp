@@ -17,6 +17,7 @@
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_common/ros/robot_body.h"
+#include "scanstop_explorer/parameters.h"
 #include "scanstop_explorer/render.h"
 
 namespace scanstop {
@@ -44,27 +45,19 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "max_coordinate_m", n.max_coordinate_m);
   optional(pnh, "max_unreachable", n.max_unreachable);
   optional(pnh, "max_point_distance_m", n.max_point_distance_m);
-  // ROS parameter names are the config fields' names (so a ConfigError names the parameter).
-  optional(pnh, "resolution_m", c.floor.resolution_m);
-  optional(pnh, "floor_layer_m", c.floor.floor_layer_m);
-  optional(pnh, "grid_margin_m", c.floor.grid_margin_m);
-  optional(pnh, "min_floor_points", c.floor.min_floor_points);
-  optional(pnh, "min_obstacle_points", c.floor.min_obstacle_points);
-  optional(pnh, "floor_fill_radius_m", c.floor.floor_fill_radius_m);
-  optional(pnh, "speckle_min_points", c.floor.speckle_min_points);
-  optional(pnh, "speckle_max_cells", c.floor.speckle_max_cells);
-  optional(pnh, "min_obstacle_scans", c.floor.min_obstacle_scans);
+  // ROS parameter names are the config fields' names (so a ConfigError names the parameter); the
+  // one list (parameters.h) that the offline tools' --config reads too.
+  forEachParameter(c, [&](const char* name, auto& value) { optional(pnh, name, value); });
   // The body (robot_body/..., config/robot_body.yaml) gives the inflation and the obstacle layer:
   // robot_radius_m = radius + inflation_margin_m, the layer's top = height + obstacle_height_margin_m.
   // ~robot_radius_m / ~robot_height_m set explicitly override them (a WARN names both).
   const RobotBody body = ros_params::readRobotBody(pnh);
-  double inflation_margin_m = 0.04, obstacle_height_margin_m = 0.03;
-  optional(pnh, "inflation_margin_m", inflation_margin_m);
-  optional(pnh, "obstacle_height_margin_m", obstacle_height_margin_m);
-  requireInRange(pnh.resolveName("inflation_margin_m"), inflation_margin_m, 0.0, 1.0, "m");
-  requireInRange(pnh.resolveName("obstacle_height_margin_m"), obstacle_height_margin_m, 0.0, 1.0, "m");
-  c.planner.robot_radius_m = body.radius_m + inflation_margin_m;
-  c.floor.robot_height_m = body.height_m + obstacle_height_margin_m - 0.5 * c.floor.floor_layer_m;
+  BodyMargins margins;
+  optional(pnh, "inflation_margin_m", margins.inflation_margin_m);
+  optional(pnh, "obstacle_height_margin_m", margins.obstacle_height_margin_m);
+  requireInRange(pnh.resolveName("inflation_margin_m"), margins.inflation_margin_m, 0.0, 1.0, "m");
+  requireInRange(pnh.resolveName("obstacle_height_margin_m"), margins.obstacle_height_margin_m, 0.0, 1.0, "m");
+  applyBody(body, margins, c);
   const auto override_body = [&](const std::string& name, double& value, double from_body) {
     known.push_back(name);
     if (!pnh.hasParam(name)) return;
@@ -74,26 +67,6 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   };
   override_body("robot_radius_m", c.planner.robot_radius_m, c.planner.robot_radius_m);
   override_body("robot_height_m", c.floor.robot_height_m, c.floor.robot_height_m);
-  optional(pnh, "d_max_m", c.planner.d_max_m);
-  optional(pnh, "k_r_m", c.planner.k_r_m);
-  optional(pnh, "k0", c.planner.k0);
-  optional(pnh, "c0", c.planner.c0);
-  optional(pnh, "knowledge_threshold", c.planner.knowledge_threshold);
-  optional(pnh, "frontier_distance_m", c.planner.frontier_distance_m);
-  optional(pnh, "occluded_frontier_knowledge", c.planner.occluded_frontier_knowledge);
-  optional(pnh, "occluded_frontier_min_m", c.planner.occluded_frontier_min_m);
-  optional(pnh, "frontier_min_unknown_m", c.planner.frontier_min_unknown_m);
-  optional(pnh, "ignore_wall_base_frontier", c.planner.ignore_wall_base_frontier);
-  optional(pnh, "start_snap_m", c.planner.start_snap_m);
-  optional(pnh, "target_clearance_m", c.planner.target_clearance_m);
-  optional(pnh, "max_coverage_landmarks", c.planner.max_coverage_landmarks);
-  optional(pnh, "known_free_radius_m", c.known_free_radius_m);
-  optional(pnh, "self_filter_radius_m", c.self_filter_radius_m);
-  optional(pnh, "target_tolerance_m", c.target_tolerance_m);
-  optional(pnh, "progress_m", c.progress_m);
-  optional(pnh, "max_failed_attempts", c.max_failed_attempts);
-  optional(pnh, "blacklist_radius_m", c.blacklist_radius_m);
-  optional(pnh, "contact_radius_m", c.contact_radius_m);
   for (const std::string& name : ros_params::unknownParameters(pnh, known))
     ROS_WARN("explorer_node: ignoring unknown parameter '%s' (a typo? the names carry their unit, e.g. k_r_m)",
              name.c_str());

@@ -1,5 +1,5 @@
 // plan_step: one exploration planning step on a saved map directory, without ROS.
-//   plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N] [--skip-bad]
+//   plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N] [--config FILE] [--skip-bad]
 // Writes OUT_DIR/{floor,distance,cost,knowledge,evaluation}.png, path.csv and plan.json; --json
 // also prints the plan as one JSON object on stdout. Exit status: 0 planned (or complete),
 // 1 planning failed, 2 bad arguments or unreadable input.
@@ -17,16 +17,19 @@
 #include "scanstop_common/map_check.h"
 #include "scanstop_common/options.h"
 #include "scanstop_explorer/explorer.h"
+#include "scanstop_explorer/parameters.h"
 #include "scanstop_explorer/render.h"
 
 namespace {
 constexpr const char* kUsage =
-    "usage: plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N] [--skip-bad]\n"
+    "usage: plan_step MAP_DIR OUT_DIR [--pose x,y,yaw] [--json] [--scale N] [--config FILE] [--skip-bad]\n"
     "  MAP_DIR  map directory written by icp_slam_node (poses.csv + scans/)\n"
     "  OUT_DIR  where the images, path.csv and plan.json go (created if missing)\n"
     "  --pose   robot pose in the map frame [m, m, rad], |x|, |y| <= 10000; default: the pose of the last scan\n"
     "  --json   print the plan (path, target, score, complete, coverage) as one JSON object\n"
     "  --scale  image pixels per grid cell, 1-16 (default 2)\n"
+    "  --config  explorer parameter file (e.g. config/explorer.yaml: the mission's explorer_node);\n"
+    "            default: the explorer's built-in defaults (the thesis' values)\n"
     "  --skip-bad  plan on the good scans of a map with bad lines or scan files (each named on stderr);\n"
     "              default: refuse such a map, naming the first problem (exit 2)\n";
 
@@ -42,6 +45,7 @@ int main(int argc, char** argv) {
   std::optional<Pose2D> pose_arg;
   bool json = false, skip_bad = false;
   int scale = 2;
+  std::string config_file;
   Options opts("plan_step", kUsage);
   opts.positional("MAP_DIR", map_dir)
       .positional("OUT_DIR", out_dir)
@@ -52,12 +56,15 @@ int main(int argc, char** argv) {
               })
       .flag("--json", json)
       .integer("--scale", scale, 1, 16)
+      .text("--config", config_file)
       .flag("--skip-bad", skip_bad);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   try {
+    explorer::ExplorerConfig config;
+    if (!config_file.empty()) explorer::readParameterFile(config_file, config);
     const MapDirectory dir =
         openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "plan_step: warning: " << w << "\n"; });
-    explorer::Explorer ex;
+    explorer::Explorer ex(config);
     std::vector<std::string> problems;
     ex.loadMapDirectory(dir, &problems);
     // A scan that passed the header check but did not load: refused like any other bad scan.

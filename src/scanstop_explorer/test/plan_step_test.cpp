@@ -9,6 +9,9 @@
 #include <fstream>
 #include <string>
 #include <vector>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
 
 #include "scenes.h"
 #include "scanstop_common/file_util.h"
@@ -103,6 +106,52 @@ void edit(const std::string& path, const std::string& from, const std::string& t
 }
 bool exists(const std::string& path) { return std::ifstream(path).good() || std::system(("test -e " + path).c_str()) == 0; }
 }  // namespace
+
+namespace {
+/// The longest leg of OUT_DIR/path.csv ("x,y,scan" lines) [m].
+double longestLeg(const std::string& csv_path) {
+  std::istringstream in(readFile(csv_path));
+  std::string line;
+  std::getline(in, line);  // header
+  double longest = 0.0, px = 0.0, py = 0.0;
+  bool first = true;
+  while (std::getline(in, line)) {
+    double x = 0.0, y = 0.0;
+    if (std::sscanf(line.c_str(), "%lf,%lf", &x, &y) != 2) continue;
+    if (!first) longest = std::max(longest, std::hypot(x - px, y - py));
+    first = false;
+    px = x;
+    py = y;
+  }
+  return longest;
+}
+}  // namespace
+
+// Issue #21: plan_step --config reads an explorer parameter file (config/explorer.yaml) as
+// explorer_node reads its parameters; a bad file is refused naming the parameter.
+TEST(PlanStep, ConfigFileSetsTheExplorersParameters) {
+  const std::string dir = tempDir();
+  makeMap(dir + "/map", {Pose2D(1.0, 1.0, 0.0)});
+  const std::string exe = std::string(PLAN_STEP_EXE) + " " + dir + "/map " + dir + "/out --pose 1.0,1.0,0.0";
+  const ToolRun plain = run(exe);
+  ASSERT_EQ(plain.status, 0) << plain.out;
+  const double plain_leg = longestLeg(dir + "/out/path.csv");
+  ASSERT_GT(plain_leg, 0.8) << "the scene needs a long first path for this test";
+  writeFileAtomic(dir + "/short.yaml", "d_max_m: 0.6\n");
+  const ToolRun short_legs = run(exe + " --config " + dir + "/short.yaml");
+  ASSERT_EQ(short_legs.status, 0) << short_legs.out;
+  EXPECT_LE(longestLeg(dir + "/out/path.csv"), 0.6 + 1e-6);
+  const ToolRun mission = run(exe + " --config " + std::string(SCANSTOP_CONFIG_DIR) + "/explorer.yaml");
+  EXPECT_EQ(mission.status, 0) << mission.out;
+  writeFileAtomic(dir + "/bad.yaml", "d_max_m: 0.6\nk_r: 2.0\n");
+  const ToolRun bad = run(exe + " --config " + dir + "/bad.yaml");
+  EXPECT_EQ(bad.status, 2) << bad.out;
+  EXPECT_NE(bad.out.find("bad.yaml: unknown explorer parameter 'k_r'"), std::string::npos) << bad.out;
+  const ToolRun missing = run(exe + " --config " + dir + "/none.yaml");
+  EXPECT_EQ(missing.status, 2) << missing.out;
+  EXPECT_NE(missing.out.find("none.yaml: cannot read the parameter file"), std::string::npos) << missing.out;
+  std::system(("rm -rf " + dir).c_str());
+}
 
 // Issue #22 class 2: plan_step on a map with a missing scan file or a NaN pose went on with the rest
 // and exited 0 (the plan changed). It refuses the map naming the file and line, or warns for each
