@@ -51,6 +51,7 @@ void MissionConfig::validate() const {
   requireInRange("leg_check_max_z", leg_check_max_z_m, leg_check_min_z_m, 5.0, "m");
   requireInRange("leg_check_self", leg_check_self_m, 0.0, 2.0, "m");
   requireInRange("leg_check_min_points", leg_check_min_points, 1, 1000);
+  requireInRange("leg_check_turn_error", leg_check_turn_error, 0.0, 0.5);
   requireInRange("retry_backoff", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
   requireInRange("max_cycles", max_cycles, 1, 1000000);
@@ -462,11 +463,15 @@ double Mission::freeTravel() const {
   // From the scan's base_link to the present one, by odometry.
   const Pose2D T = odom_now.inverse() * obstacles_odom_;
   const double r = config_.leg_check_radius_m, r2 = r * r;
+  // The heading's uncertainty from turning since the scan: the swept disc widens along the leg.
+  const double widen = std::tan(std::min(0.5, config_.leg_check_turn_error * std::abs(normalizeAngle(T.yaw))));
   std::vector<double> hits;  // where along the leg the disc first touches each point ahead
   for (const Eigen::Vector2d& q : obstacles_) {
     const Eigen::Vector2d p = T.transformPoint(q);
-    if (std::abs(p.y()) >= r || p.squaredNorm() < r2) continue;  // beside the way, or under the body now
-    const double s = p.x() - std::sqrt(r2 - p.y() * p.y());
+    if (p.squaredNorm() < r2) continue;  // under the body now
+    const double re = r + widen * std::max(0.0, p.x());
+    if (std::abs(p.y()) >= re) continue;  // beside the way
+    const double s = p.x() - std::sqrt(re * re - p.y() * p.y());
     if (s >= 0.0) hits.push_back(s);
   }
   const size_t k = static_cast<size_t>(config_.leg_check_min_points);

@@ -112,6 +112,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "leg_check_max_z", config_.leg_check_max_z_m);
   ros_params::optional(pnh, "leg_check_self", config_.leg_check_self_m);
   ros_params::optional(pnh, "leg_check_min_points", config_.leg_check_min_points);
+  ros_params::optional(pnh, "leg_check_turn_error", config_.leg_check_turn_error);
   ros_params::optional(pnh, "retry_backoff", config_.retry_backoff_s);
   ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
   ros_params::optional(pnh, "build_mesh", config_.build_mesh);
@@ -167,7 +168,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   const std::vector<std::string> unknown = ros_params::unknownParameters(
       pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
             "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts", "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
-            "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
+            "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "leg_check_turn_error", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
             "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
             "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
             "robot_radius", "explorer_ns", "run_identity", "master_timeout"});
@@ -177,7 +178,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
                       "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, return_home, home_tolerance, home_scan_travel, "
                       "contact_backoff, contact_offset, max_contacts, contact_point_radius, leg_check, leg_check_radius, leg_check_body_margin, leg_check_margin, leg_check_min_z, "
-                      "leg_check_max_z, leg_check_self, leg_check_min_points, max_step_retries, "
+                      "leg_check_max_z, leg_check_self, leg_check_min_points, leg_check_turn_error, max_step_retries, "
                       "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
                       "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns, run_identity, "
                       "master_timeout");

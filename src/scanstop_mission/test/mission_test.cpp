@@ -524,6 +524,28 @@ TEST(Mission, AfterAContactTheRobotBacksOffAndEveryLaterPlanKnowsTheContact) {
   EXPECT_EQ(resumed.snapshot().contacts[0].radius_m, s.contacts[0].radius_m);
 }
 
+TEST(Mission, TheLegCheckWidensWithTheTurnOdometryCannotSeeTheErrorOf) {
+  // A wall 0.31 m beside the leg (beyond the 0.28 m swept disc) after a 180 deg turn: a 3 % turn
+  // error puts it 0.1 m nearer at 1 m, so the widened check stops the leg; the plain disc does not.
+  const auto legChecked = [](double turn_error) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.walls = {{{-0.4, 0.31}, {-3.0, 0.31}}};
+    sys.targets = {{-2.5, 0.0}};
+    sys.scan_walls = true;
+    MissionConfig c = config(dir.path());
+    c.leg_check_turn_error = turn_error;
+    c.max_scans = 2;
+    Mission m(c, sys, quiet, quiet);
+    m.run();
+    bool shortened = false;
+    for (const auto& e : m.snapshot().events) shortened = shortened || e.what.find("leg check:") != std::string::npos;
+    return shortened;
+  };
+  EXPECT_TRUE(legChecked(0.03));
+  EXPECT_FALSE(legChecked(0.0));
+}
+
 TEST(Mission, TheContactIsTheScannedPointTheBodyTouchedNotAlwaysStraightAhead) {
   // The leg (to (3, 0.5), 9.5 deg off the x axis) meets a wall across it at (1.5, 0.25); the scans
   // see the wall but the leg check is off. The contact is the scanned wall point nearest to the robot,

@@ -69,6 +69,12 @@ struct MissionConfig {
   double leg_check_max_z_m = 0.6;      ///< ... to (the body's and the mast's height) [m] (mission_node: robot_body/height)
   double leg_check_self_m = 0.3;       ///< scan points this close to base_link are the robot itself [m], [0, 2]
   int leg_check_min_points = 3;        ///< points that make an obstruction (random readings are single), [1, 1000]
+  /// Odometry does not see a rotation's own error (the thesis profile: 2 % + 1 % of the turn), so
+  /// after turning by a since the scan the true heading may be off by this times |a|: the swept
+  /// disc widens along the leg by x * tan(leg_check_turn_error * |a|) at x ahead (furnished_2: a
+  /// 190 deg turn beside a table edge, 2 cm off it; at the estimated heading the edge lay beside the
+  /// leg, at the true one ahead). 0 = the plain disc [rad/rad], [0, 0.5]
+  double leg_check_turn_error = 0.03;
   /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
   static constexpr double kCloseLeg = 0.05;
   int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
