@@ -28,6 +28,20 @@ const char* const kHeader =
 constexpr size_t kColumns = 17;
 const char* const kHistoryHeader = "index,revision,map_x,map_y,map_yaw";
 constexpr double kMaxIndex = 9999999.0;  // scan_%04u names sort up to 7 digits
+
+/// A relative path without empty or "." components ("scans//./a.pcd" -> "scans/a.pcd"); "" when none is left.
+std::string lexicallyNormal(const std::string& path) {
+  std::string out;
+  size_t start = 0;
+  while (start <= path.size()) {
+    const size_t end = std::min(path.find('/', start), path.size());
+    const std::string part = path.substr(start, end - start);
+    if (!part.empty() && part != ".") out += (out.empty() ? "" : "/") + part;
+    start = end + 1;
+  }
+  return out;
+}
+
 /// Pose coordinates beyond this are refused when read or appended (issue #22 class 3: one pose 100 km
 /// away made a tool's grid grow to gigabytes). 10 km is far beyond any building the robot maps.
 constexpr double kMaxPoseCoordinateM = 10000.0;
@@ -104,6 +118,10 @@ MapScanInfo parseLine(const std::string& line) {
   const bool control = std::any_of(info.file.begin(), info.file.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; });
   if (info.file.empty() || info.file.find("..") != std::string::npos || info.file[0] == '/' || control)
     fail("scan file name '" + info.file.substr(0, 40) + "' must be a relative path inside the map directory");
+  // One spelling per file: "scans//a.pcd" and "./scans/a.pcd" name scans/a.pcd, so that the checks
+  // against other lines' files (and append()'s own names) compare like with like.
+  info.file = lexicallyNormal(info.file);
+  if (info.file.empty()) fail("scan file name '" + f[1].substr(0, 40) + "' names no file");
   return info;
 }
 

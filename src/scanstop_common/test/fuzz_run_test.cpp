@@ -19,6 +19,7 @@
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/file_util.h"
+#include "scanstop_common/fuzz_finding.h"
 
 namespace scanstop {
 namespace {
@@ -122,7 +123,8 @@ class CommonFuzz : public ::testing::Test {
     const std::string output((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
         << name << "_fuzzer failed (artifacts in " << dir_ << "):\n"
-        << output.substr(output.size() > 6000 ? output.size() - 6000 : 0);
+        << fuzzFinding(output) << "--- the end of the log:\n"
+        << output.substr(output.size() > 3000 ? output.size() - 3000 : 0);
     // libFuzzer ends with "Done N runs in S second(s)": the run must have exercised the target.
     const size_t done = output.rfind("Done ");
     ASSERT_NE(done, std::string::npos) << output;

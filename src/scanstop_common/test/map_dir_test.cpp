@@ -307,6 +307,40 @@ TEST(MapDirectory, LineNamingAnotherScansFileIsNeverOverwritten) {
       << third.problems().front().message();
 }
 
+TEST(MapDirectory, AFileNameSpelledAnotherWayIsStillThatFile) {
+  // Found by the map-directory fuzzer: a line naming "scans//scan_0001.pcd" was not recognised as
+  // scans/scan_0001.pcd, so append() overwrote that scan's file and the reopened map lost a scan.
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 2);
+  const std::string poses = dir + "/poses.csv";
+  replaceLine(poses, 2, "0,./scans//scan_0001.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0");
+  replaceLine(poses, 3, "1,scans/./scan_0000.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0");
+  PointCloud cloud;
+  cloud.push_back({7, 7, 7});
+  {
+    MapDirectory map(dir);
+    EXPECT_TRUE(map.problems().empty()) << map.problems().front().message();
+    ASSERT_EQ(map.size(), 2u);
+    EXPECT_EQ(map.scans()[0].file, "scans/scan_0001.pcd");
+    EXPECT_EQ(map.scans()[1].file, "scans/scan_0000.pcd");
+    EXPECT_EQ(map.nextIndex(), 2u);  // scans/scan_0002.pcd is free; 0 and 1 are taken under other spellings
+    map.append(info(2, Pose2D()), cloud);
+  }
+  const MapDirectory again(dir);
+  EXPECT_EQ(indices(again), (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_NE(readFile(poses).find("0,scans/scan_0001.pcd,"), std::string::npos);  // rewritten in one spelling
+  // Two spellings of one file on two lines: the second is skipped, as for one spelling.
+  std::ofstream(poses, std::ios::app) << "7,scans//scan_0000.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  const MapDirectory third(dir);
+  EXPECT_EQ(indices(third), (std::vector<uint32_t>{0, 1, 2}));
+  // A name with nothing left after normalising is refused by line.
+  std::ofstream(poses, std::ios::app) << "8,.//.,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
+  const MapDirectory fourth(dir);
+  EXPECT_TRUE(std::any_of(fourth.problems().begin(), fourth.problems().end(), [](const MapProblem& p) {
+    return p.problem.find("scan file name './/.' names no file") != std::string::npos;
+  }));
+}
+
 TEST(MapDirectory, NextIndexAfterAppendSkipsANamedFile) {
   TempDir tmp;
   const std::string dir = makeMap(tmp, 2);

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <string>
 
+#include "scanstop_common/fuzz_finding.h"
 #include "scanstop_pioneer/p2os_protocol.h"
 
 namespace {
@@ -58,7 +59,9 @@ TEST(SipFuzz, BoundedRunFindsNoCrash) {
   std::ifstream in(log);
   const std::string output((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
-      << "sip_fuzzer failed (artifacts in " << dir << "):\n" << output.substr(output.size() > 6000 ? output.size() - 6000 : 0);
+      << "sip_fuzzer failed (artifacts in " << dir << "):\n"
+      << scanstop::fuzzFinding(output) << "--- the end of the log:\n"
+      << output.substr(output.size() > 3000 ? output.size() - 3000 : 0);
   // libFuzzer ends with "Done N runs in S second(s)": the run must have exercised the parser.
   const size_t done = output.rfind("Done ");
   ASSERT_NE(done, std::string::npos) << output;
