@@ -52,6 +52,9 @@ void MissionConfig::validate() const {
   requireInRange("leg_check_self", leg_check_self_m, 0.0, 2.0, "m");
   requireInRange("leg_check_min_points", leg_check_min_points, 1, 1000);
   requireInRange("leg_check_turn_error", leg_check_turn_error, 0.0, 0.5);
+  requireInRange("leg_check_drift", leg_check_drift, 0.0, 0.5, "rad/m");
+  requireInRange("leg_check_distance_error", leg_check_distance_error, 0.0, 0.5);
+  requireInRange("relocalize_min_travel", relocalize_min_travel_m, 0.0, 100.0, "m");
   requireInRange("retry_backoff", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
   requireInRange("max_cycles", max_cycles, 1, 1000000);
@@ -67,6 +70,7 @@ void MissionConfig::validate() const {
 Mission::Mission(MissionConfig config, RobotSystem& robot, Log info, Log warn)
     : config_(std::move(config)), robot_(robot), info_(std::move(info)), warn_(std::move(warn)) {
   config_.validate();
+  dead_reckoning_ = DeadReckoning({config_.leg_check_turn_error, config_.leg_check_drift, config_.leg_check_distance_error});
   if (::mkdir(config_.run_dir.c_str(), 0755) != 0 && errno != EEXIST)
     throw IoError(config_.run_dir, "cannot create the run directory");
   state_.world = config_.world;
@@ -326,6 +330,7 @@ bool Mission::scanAndRegister() {
   // The leg check's obstacles: the points in the body's height band, off the robot itself.
   obstacles_.clear();
   obstacles_odom_ = scan.odom_pose;
+  dead_reckoning_.reset();
   const double self2 = config_.leg_check_self_m * config_.leg_check_self_m;
   for (const Eigen::Vector3f& p : scan.points_base)
     if (p.z() > config_.leg_check_min_z_m && p.z() < config_.leg_check_max_z_m &&
@@ -396,64 +401,73 @@ bool Mission::scanAndRegister() {
   return true;
 }
 
-bool Mission::driveTo(const Eigen::Vector2d& waypoint, bool& collision) {
-  collision = false;
+Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint) {
   for (int guard = 0; guard < 100; ++guard) {
-    if (!checkControl()) return false;
+    if (!checkControl()) return Drive::Failed;
     const Pose2D est = snapshot().estimate();
     const Eigen::Vector2d delta = waypoint - Eigen::Vector2d(est.x, est.y);
     const double distance = delta.norm();
-    if (distance <= config_.waypoint_tolerance_m) return true;
+    if (distance <= config_.waypoint_tolerance_m) return Drive::Reached;
     setState(State::Driving);
     const double turn = normalizeAngle(std::atan2(delta.y(), delta.x()) - est.yaw);
     if (std::abs(turn) > config_.heading_tolerance_rad) {
       const MotionResult r = robot_.rotate(turn);
       noteMotion(r, false);
       if (!r.success || r.collision) {
-        collision = r.collision;
         event("rotation by " + fmt(turn * 180.0 / M_PI, 1) + " deg failed: " + r.message, true);
-        if (collision) escapeContact(0, "rotation");
-        return false;
+        if (!r.collision) return Drive::Failed;
+        escapeContact(0, "rotation");
+        return Drive::Collision;
       }
     }
     double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
     const double free = freeTravel();
     if (free - config_.leg_check_margin_m < step) {
       const double allowed = std::max(0.0, free - config_.leg_check_margin_m);
-      event("leg check: the latest scan shows an obstruction " + fmt(free) + " m ahead on the " + fmt(step) +
-                " m leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")" +
-                (allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it"),
-            true);
+      // Clear with the plain disc: only what odometry cannot see since the scan stops the leg, and
+      // a scan here (after some driving) re-localizes the robot.
+      const bool relocalize = freeTravel(false) - config_.leg_check_margin_m >= step &&
+                              dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m;
+      std::string what = "leg check: the latest scan shows an obstruction " + fmt(free) + " m ahead on the " +
+                         fmt(step) + " m leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")";
+      if (relocalize)
+        what += " within what odometry cannot see (" + fmt(dead_reckoning_.drivenM()) + " m and " +
+                fmt(dead_reckoning_.turnedRad() * 180.0 / M_PI, 0) + " deg since the scan: position +-" +
+                fmt(dead_reckoning_.positionBoundM()) + " m, heading +-" +
+                fmt(dead_reckoning_.headingBoundRad() * 180.0 / M_PI, 1) + " deg)";
+      what += allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it";
+      if (relocalize) what += ", then scanning to re-localize";
+      event(what, true);
       if (allowed >= 0.05) {
         const MotionResult r = robot_.forward(allowed);
         noteMotion(r, true);
         if (r.collision) {
-          collision = true;
           event("collision after " + fmt(r.achieved) + " of " + fmt(allowed) + " m: " + r.message, true);
           escapeContact(1, "forward motion");
+          return Drive::Collision;
         }
+        if (!r.success) return Drive::Failed;
       }
-      return false;
+      return relocalize ? Drive::Relocalize : Drive::Failed;
     }
     const MotionResult r = robot_.forward(step);
     noteMotion(r, true);
     if (r.collision) {
-      collision = true;
       event("collision after " + fmt(r.achieved) + " of " + fmt(step) + " m: " + r.message, true);
       escapeContact(1, "forward motion");
-      return false;
+      return Drive::Collision;
     }
     if (!r.success) {
       event("forward motion of " + fmt(step) + " m failed: " + r.message, true);
-      return false;
+      return Drive::Failed;
     }
     save();
   }
   event("could not reach waypoint (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ") in 100 motions", true);
-  return false;
+  return Drive::Failed;
 }
 
-double Mission::freeTravel() const {
+double Mission::freeTravel(bool dead_reckoning) const {
   if (!config_.leg_check || obstacles_.empty()) return std::numeric_limits<double>::infinity();
   Pose2D odom_now;
   {
@@ -463,13 +477,12 @@ double Mission::freeTravel() const {
   // From the scan's base_link to the present one, by odometry.
   const Pose2D T = odom_now.inverse() * obstacles_odom_;
   const double r = config_.leg_check_radius_m, r2 = r * r;
-  // The heading's uncertainty from turning since the scan: the swept disc widens along the leg.
-  const double widen = std::tan(std::min(0.5, config_.leg_check_turn_error * std::abs(normalizeAngle(T.yaw))));
   std::vector<double> hits;  // where along the leg the disc first touches each point ahead
   for (const Eigen::Vector2d& q : obstacles_) {
     const Eigen::Vector2d p = T.transformPoint(q);
     if (p.squaredNorm() < r2) continue;  // under the body now
-    const double re = r + widen * std::max(0.0, p.x());
+    // The disc that holds the true body there, given what odometry cannot see since the scan.
+    const double re = dead_reckoning ? dead_reckoning_.widenedRadius(r, p.x()) : r;
     if (std::abs(p.y()) >= re) continue;  // beside the way
     const double s = p.x() - std::sqrt(re * re - p.y() * p.y());
     if (s >= 0.0) hits.push_back(s);
@@ -483,7 +496,10 @@ double Mission::freeTravel() const {
 void Mission::noteMotion(const MotionResult& r, bool leg) {
   std::lock_guard<std::mutex> lock(mutex_);
   state_.modelled_time_s += r.duration_s;
-  if (r.success || r.collision) state_.odom_now = r.odom_pose;
+  if (r.success || r.collision) {
+    dead_reckoning_.add(state_.odom_now.inverse() * r.odom_pose);
+    state_.odom_now = r.odom_pose;
+  }
   if (!r.true_clearance_m) return;
   const double c = *r.true_clearance_m;
   ++state_.clearance_motions;
@@ -731,9 +747,25 @@ State Mission::run() {
     for (size_t i = first; i < plan.waypoints.size() && !replan; ++i) {
       travel += (plan.waypoints[i] - from).norm();
       from = plan.waypoints[i];
-      bool collision = false;
       setPath(i, -1);
-      if (!driveTo(plan.waypoints[i], collision)) {
+      Drive drive = driveTo(plan.waypoints[i]);
+      while (drive == Drive::Relocalize) {
+        // Scan where the robot stopped (its pose is then known again), then on to the same waypoint.
+        // (Each time after relocalize_min_travel_m of driving: the robot gets on.)
+        travel = 0.0;
+        setPath(i, static_cast<int>(snapshot().scans.size()));
+        save();
+        if (!scanAndRegister()) break;
+        setPath(i, -1);
+        drive = driveTo(plan.waypoints[i]);
+      }
+      if (drive == Drive::Relocalize) {  // the re-localization scan failed
+        if (!checkControl()) return finish(State::Aborted, "aborted by the user");
+        replan = true;
+        break;
+      }
+      if (drive != Drive::Reached) {
+        const bool collision = drive == Drive::Collision;
         if (!checkControl()) return finish(State::Aborted, "aborted by the user");
         {
           std::lock_guard<std::mutex> lock(mutex_);

@@ -113,6 +113,9 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "leg_check_self", config_.leg_check_self_m);
   ros_params::optional(pnh, "leg_check_min_points", config_.leg_check_min_points);
   ros_params::optional(pnh, "leg_check_turn_error", config_.leg_check_turn_error);
+  ros_params::optional(pnh, "leg_check_drift", config_.leg_check_drift);
+  ros_params::optional(pnh, "leg_check_distance_error", config_.leg_check_distance_error);
+  ros_params::optional(pnh, "relocalize_min_travel", config_.relocalize_min_travel_m);
   ros_params::optional(pnh, "retry_backoff", config_.retry_backoff_s);
   ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
   ros_params::optional(pnh, "build_mesh", config_.build_mesh);
@@ -165,23 +168,22 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   }
   ros_params::optional(pnh, "master_timeout", master_timeout_s_);
   // A misspelt parameter would silently keep its default: refuse it.
-  const std::vector<std::string> unknown = ros_params::unknownParameters(
-      pnh, {"run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
-            "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts", "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
-            "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "leg_check_turn_error", "max_step_retries", "retry_backoff", "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir",
-            "wait_for_service_timeout", "scan_timeout", "motion_timeout", "register_timeout", "plan_timeout",
-            "mesh_timeout", "autostart", "shutdown_when_done", "mesh_output", "world_file", "world_frame", "map_frame",
-            "robot_radius", "explorer_ns", "run_identity", "master_timeout"});
+  const std::vector<std::string> known = {
+      "run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
+      "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts",
+      "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
+      "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "leg_check_turn_error",
+      "leg_check_drift", "leg_check_distance_error", "relocalize_min_travel", "max_step_retries", "retry_backoff",
+      "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir", "wait_for_service_timeout", "scan_timeout",
+      "motion_timeout", "register_timeout", "plan_timeout", "mesh_timeout", "autostart", "shutdown_when_done",
+      "mesh_output", "world_file", "world_frame", "map_frame", "robot_radius", "explorer_ns", "run_identity",
+      "master_timeout", "html_report", "report_script"};
+  const std::vector<std::string> unknown = ros_params::unknownParameters(pnh, known);
   if (!unknown.empty()) {
-    std::string names;
+    std::string names, all;
     for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
-    throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows run_dir, planes, max_scans, "
-                      "d_max, waypoint_tolerance, heading_tolerance, min_scan_travel, return_home, home_tolerance, home_scan_travel, "
-                      "contact_backoff, contact_offset, max_contacts, contact_point_radius, leg_check, leg_check_radius, leg_check_body_margin, leg_check_margin, leg_check_min_z, "
-                      "leg_check_max_z, leg_check_self, leg_check_min_points, leg_check_turn_error, max_step_retries, "
-                      "retry_backoff, max_consecutive_failed_cycles, build_mesh, mesh_output, world, map_dir, *_timeout, "
-                      "autostart, shutdown_when_done, world_file, world_frame, map_frame, robot_radius, explorer_ns, run_identity, "
-                      "master_timeout");
+    for (const std::string& n : known) all += (all.empty() ? "" : ", ") + n;
+    throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows " + all);
   }
   try {
     config_.validate();

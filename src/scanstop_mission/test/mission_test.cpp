@@ -527,7 +527,7 @@ TEST(Mission, AfterAContactTheRobotBacksOffAndEveryLaterPlanKnowsTheContact) {
 TEST(Mission, TheLegCheckWidensWithTheTurnOdometryCannotSeeTheErrorOf) {
   // A wall 0.31 m beside the leg (beyond the 0.28 m swept disc) after a 180 deg turn: a 3 % turn
   // error puts it 0.1 m nearer at 1 m, so the widened check stops the leg; the plain disc does not.
-  const auto legChecked = [](double turn_error) {
+  const auto legChecked = [](double turn_error, double drift) {
     TempDir dir;
     FakeSystem sys;
     sys.walls = {{{-0.4, 0.31}, {-3.0, 0.31}}};
@@ -535,6 +535,8 @@ TEST(Mission, TheLegCheckWidensWithTheTurnOdometryCannotSeeTheErrorOf) {
     sys.scan_walls = true;
     MissionConfig c = config(dir.path());
     c.leg_check_turn_error = turn_error;
+    c.leg_check_drift = drift;
+    c.leg_check_distance_error = 0.0;
     c.max_scans = 2;
     Mission m(c, sys, quiet, quiet);
     m.run();
@@ -542,8 +544,73 @@ TEST(Mission, TheLegCheckWidensWithTheTurnOdometryCannotSeeTheErrorOf) {
     for (const auto& e : m.snapshot().events) shortened = shortened || e.what.find("leg check:") != std::string::npos;
     return shortened;
   };
-  EXPECT_TRUE(legChecked(0.03));
-  EXPECT_FALSE(legChecked(0.0));
+  EXPECT_TRUE(legChecked(0.03, 0.0));
+  EXPECT_FALSE(legChecked(0.0, 0.0));
+}
+
+TEST(Mission, AfterDrivingBlindTheRobotScansToRelocalizeAndGoesOnWithTheSamePath) {
+  // A wall 0.40 m beside the last metres of a 6 m path (beyond the 0.28 m disc). After 4 m on
+  // odometry alone the position bound is ~0.2 m: the widened check stops the leg, the robot scans
+  // there and drives on, the target not marked unreachable. With the plain disc it drives through.
+  struct Outcome {
+    int relocalized = 0;
+    bool reached = false;
+    size_t unreachable = 0;
+    int scans = 0;
+    std::vector<std::pair<char, double>> motions;
+  };
+  const auto run = [](const DeadReckoningModel& model) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.walls = {{{4.0, 0.40}, {6.5, 0.40}}};
+    sys.targets = {{6.0, 0.0}};
+    sys.scan_walls = true;
+    MissionConfig c = config(dir.path());
+    c.leg_check_turn_error = model.turn_error;
+    c.leg_check_drift = model.drift_rad_per_m;
+    c.leg_check_distance_error = model.distance_error;
+    Mission m(c, sys, quiet, quiet);
+    m.run();
+    Outcome o;
+    const MissionState s = m.snapshot();
+    for (const auto& e : s.events) o.relocalized += e.what.find("then scanning to re-localize") != std::string::npos ? 1 : 0;
+    o.reached = std::hypot(sys.truth.x - 6.0, sys.truth.y) < 0.3;
+    o.unreachable = s.unreachable.size();
+    o.scans = sys.scans_taken;
+    o.motions = sys.motions;
+    EXPECT_EQ(sys.first_collision, -1);
+    return o;
+  };
+  const Outcome widened = run(DeadReckoningModel());
+  const Outcome plain = run(DeadReckoningModel{0.0, 0.0, 0.0});
+  EXPECT_GE(widened.relocalized, 1);
+  EXPECT_TRUE(widened.reached);
+  EXPECT_EQ(widened.unreachable, 0u);
+  EXPECT_LE(widened.scans, plain.scans + widened.relocalized);  // nothing but the re-localizations added
+  EXPECT_EQ(plain.relocalized, 0);
+  EXPECT_TRUE(plain.reached);
+  EXPECT_EQ(plain.unreachable, 0u);
+}
+
+TEST(Mission, AStopRightAfterAScanIsNoReasonToScanAgainThere) {
+  // A wall 0.30 m beside a 2 m leg after a 180 deg turn: the widened disc stops the leg, but the robot
+  // has not driven since its scan (relocalize_min_travel): the target is marked unreachable, as for
+  // an obstruction, instead of a scan where the last one was taken.
+  TempDir dir;
+  FakeSystem sys;
+  sys.walls = {{{-0.4, 0.31}, {-3.0, 0.31}}};
+  sys.targets = {{-2.5, 0.0}};
+  sys.scan_walls = true;
+  MissionConfig c = config(dir.path());
+  c.max_scans = 2;
+  Mission m(c, sys, quiet, quiet);
+  m.run();
+  const MissionState s = m.snapshot();
+  bool relocalized = false;
+  for (const auto& e : s.events) relocalized = relocalized || e.what.find("then scanning to re-localize") != std::string::npos;
+  EXPECT_FALSE(relocalized);
+  ASSERT_EQ(s.unreachable.size(), 1u);
+  EXPECT_NEAR(s.unreachable[0].x(), -2.5, 1e-9);
 }
 
 TEST(Mission, TheContactIsTheScannedPointTheBodyTouchedNotAlwaysStraightAhead) {

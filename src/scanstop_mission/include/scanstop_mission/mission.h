@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "scanstop_mission/dead_reckoning.h"
 #include "scanstop_mission/mission_state.h"
 #include "scanstop_mission/robot_system.h"
 
@@ -69,12 +70,20 @@ struct MissionConfig {
   double leg_check_max_z_m = 0.6;      ///< ... to (the body's and the mast's height) [m] (mission_node: robot_body/height)
   double leg_check_self_m = 0.3;       ///< scan points this close to base_link are the robot itself [m], [0, 2]
   int leg_check_min_points = 3;        ///< points that make an obstruction (random readings are single), [1, 1000]
-  /// Odometry does not see a rotation's own error (the thesis profile: 2 % + 1 % of the turn), so
-  /// after turning by a since the scan the true heading may be off by this times |a|: the swept
-  /// disc widens along the leg by x * tan(leg_check_turn_error * |a|) at x ahead (furnished_2: a
-  /// 190 deg turn beside a table edge, 2 cm off it; at the estimated heading the edge lay beside the
-  /// leg, at the true one ahead). 0 = the plain disc [rad/rad], [0, 0.5]
-  double leg_check_turn_error = 0.03;
+  /// What odometry cannot see since the scan (DeadReckoning): the swept disc grows by the position
+  /// bound and, at x ahead, by x * tan(heading bound). The heading bound is leg_check_turn_error
+  /// times the |turns| summed since the scan plus leg_check_drift per metre driven; the position
+  /// bound grows on every metre driven by tan(heading bound) plus leg_check_distance_error.
+  /// furnished_2: a 190 deg turn beside a table edge, 2 cm off it (at the estimated heading the edge
+  /// lay beside the leg, at the true one ahead); five legs (288 deg, 4.3 m) after a scan, 0.31 m
+  /// beside the estimate, into a door jamb. All 0 = the plain disc.
+  double leg_check_turn_error = 0.03;      ///< heading error per radian turned [rad/rad], [0, 0.5]
+  double leg_check_drift = 0.015;          ///< heading drift per metre driven [rad/m], [0, 0.5]
+  double leg_check_distance_error = 0.04;  ///< position error per metre driven [m/m], [0, 0.5]
+  /// A leg the check stops only because of what odometry cannot see (with the plain disc it would
+  /// be clear), after at least this much driving since the scan: the robot scans there to
+  /// re-localize and goes on with the same path (the target is not marked unreachable). [m], [0, 100]
+  double relocalize_min_travel_m = 0.5;
   /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
   static constexpr double kCloseLeg = 0.05;
   int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
@@ -143,7 +152,14 @@ class Mission {
   /// relaxation they are the corrected ones) into the records, keeping the pose each registration
   /// answered in ScanRecord::registered_pose. Caller holds no lock.
   void adoptCurrentPoses();
-  bool driveTo(const Eigen::Vector2d& waypoint, bool& collision);
+  /// How a drive to a waypoint ended.
+  enum class Drive {
+    Reached,
+    Failed,      ///< a motion failed, or the leg check found an obstruction (the target is unreachable)
+    Collision,   ///< the robot touched something (booked as a contact, backed off)
+    Relocalize,  ///< stopped short: only what odometry cannot see made the leg unsafe; scan, go on
+  };
+  Drive driveTo(const Eigen::Vector2d& waypoint);
   /// After a collision on a motion in direction `sign` (+1 forward, -1 backward, 0 a rotation):
   /// records the contact point (none for a rotation) and backs off by contact_backoff_m.
   void escapeContact(int sign, const std::string& what);
@@ -155,7 +171,8 @@ class Mission {
   void noteMotion(const MotionResult& r, bool leg);
   /// How far the body can drive straight ahead from the present pose before the latest scan's band
   /// points obstruct it (leg_check); +inf without a scan to check against.
-  double freeTravel() const;
+  /// With `dead_reckoning` false, the plain disc (as if odometry were exact since the scan).
+  double freeTravel(bool dead_reckoning = true) const;
   bool contactBoundReached() const;
   bool checkControl();  ///< waits while paused; false when aborted
   void backoff(int attempt);  ///< waits attempt * retry_backoff_s (returns early on abort)
@@ -172,6 +189,7 @@ class Mission {
   /// pose they were taken at (the leg check).
   std::vector<Eigen::Vector2d> obstacles_;
   Pose2D obstacles_odom_;
+  DeadReckoning dead_reckoning_;  ///< what odometry cannot see since that scan (the leg check)
   Log info_, warn_;
   mutable std::mutex mutex_;
   std::condition_variable control_cv_;
