@@ -280,6 +280,7 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
     }
     res.path.poses.push_back(ros_conv::toPoseStamped(Pose2D(r.path[i].x(), r.path[i].y(), yaw), node_config_.frame_id, now));
     res.scan_at.push_back(r.scan_at[i]);
+    res.clearance.push_back(i < r.clearance_m.size() ? r.clearance_m[i] : 0.0);
   }
   if (r.success) {
     publish(r);

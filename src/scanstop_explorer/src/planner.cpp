@@ -720,12 +720,28 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     res.path.push_back(i == 0 && !res.robot_snapped ? Eigen::Vector2d(in.robot.x, in.robot.y) : toMap(cells[i].first));
     res.scan_at.push_back(i > 0);  // every intermediate landmark and the target
   }
+  for (size_t i = 0; i < res.path.size(); ++i)
+    res.clearance_m.push_back(legClearance(res.sq_dt, g, res.path[i == 0 ? 0 : i - 1], res.path[i]));
   timer.lap("path");
   res.message = std::string(in.goal ? (res.complete ? "exploration complete; " : "") + std::string("to the goal: ") : "") +
                 "target (" + fmt(res.target.x()) + ", " + fmt(res.target.y()) + ") m, " +
                 std::to_string(res.path.size()) + " waypoints, " + fmt(res.target_cost_m) + " m, b = " +
                 fmt(res.score, 4) + ", " + std::to_string(res.open_cells) + " open cells" +
                 (res.target_moved_m > 0.0 ? " (moved " + fmt(res.target_moved_m) + " m off the wall)" : "");
+}
+
+double legClearance(const cv::Mat& sq_dt, const GridGeometry& geometry, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ga = geometry.toGrid(a), gb = geometry.toGrid(b);
+  const int samples = 1 + static_cast<int>(std::ceil(2.0 * (gb - ga).norm()));  // every half cell
+  double min_sq = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= samples; ++k) {
+    const Eigen::Vector2d p = ga + (gb - ga) * (static_cast<double>(k) / samples);
+    const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
+    if (x < 0 || y < 0 || x >= sq_dt.cols || y >= sq_dt.rows) return 0.0;
+    min_sq = std::min(min_sq, static_cast<double>(sq_dt.at<int>(y, x)));
+  }
+  // Less a cell: the surface may lie anywhere in its cell, and the leg anywhere in the cells it crosses.
+  return std::max(0.0, (std::sqrt(min_sq) - 1.0) * geometry.resolution);
 }
 
 PlanResult planStep(const PlanInput& input, const PlannerConfig& config) {

@@ -49,8 +49,43 @@ void expectValidPath(const PlanResult& r, const PlannerConfig& cfg, const std::s
   double len = 0.0;
   for (size_t i = 1 + (r.robot_snapped ? 1 : 0); i < r.path.size(); ++i) len += (r.path[i] - r.path[i - 1]).norm();
   EXPECT_NEAR(len, r.target_cost_m, 1e-3) << what;
+  // Each leg's clearance: what legClearance gives, and at least the robot's radius less a cell (the
+  // legs run on the accessible floor).
+  ASSERT_EQ(r.clearance_m.size(), r.path.size()) << what;
+  for (size_t i = 1 + (r.robot_snapped ? 1 : 0); i < r.path.size(); ++i) {
+    EXPECT_DOUBLE_EQ(r.clearance_m[i], legClearance(r.sq_dt, r.geometry, r.path[i - 1], r.path[i])) << what;
+    EXPECT_GE(r.clearance_m[i], cfg.robot_radius_m - r.geometry.resolution) << what << " leg " << i;
+  }
 }
 }  // namespace
+
+TEST(LegClearance, TheSmallestDistanceFromTheLegToWhatIsNotFloor) {
+  // A corridor 1 m wide (y 0 .. 1) and 4 m long at 5 cm, walls (not floor) around it, a post at
+  // x 2.0-2.05 m, y 0.8-1.0.
+  GridGeometry g;
+  g.origin_x = -0.05;
+  g.origin_y = -0.05;
+  g.resolution = 0.05;
+  g.width = 82;
+  g.height = 22;
+  cv::Mat floor(g.height, g.width, CV_8U, cv::Scalar(0));
+  floor(cv::Rect(1, 1, 80, 20)).setTo(1);
+  floor(cv::Rect(41, 17, 1, 4)).setTo(0);
+  const cv::Mat sq_dt = squaredDistanceTransform(floor);
+  // Along the middle, away from the post and the end walls: half the width, within a cell.
+  const double middle = legClearance(sq_dt, g, {1.0, 0.5}, {1.5, 0.5});
+  EXPECT_GE(middle, 0.45);
+  EXPECT_LE(middle, 0.5);
+  // Past the post (its lower face at y 0.8): 0.3 m, within a cell.
+  const double past = legClearance(sq_dt, g, {1.0, 0.5}, {3.5, 0.5});
+  EXPECT_GE(past, 0.25);
+  EXPECT_LE(past, 0.3);
+  // Near a wall: the smaller distance; through the post or off the grid: 0.
+  EXPECT_LE(legClearance(sq_dt, g, {1.0, 0.2}, {1.5, 0.2}), 0.2);
+  EXPECT_LE(legClearance(sq_dt, g, {0.3, 0.5}, {1.5, 0.5}), 0.3);  // from the end wall at x 0
+  EXPECT_DOUBLE_EQ(legClearance(sq_dt, g, {2.025, 0.5}, {2.025, 0.95}), 0.0);
+  EXPECT_DOUBLE_EQ(legClearance(sq_dt, g, {3.0, 0.5}, {9.0, 0.5}), 0.0);
+}
 
 TEST(PlannerConfig, ValidatesRanges) {
   PlannerConfig c;

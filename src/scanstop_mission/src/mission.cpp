@@ -401,7 +401,13 @@ bool Mission::scanAndRegister() {
   return true;
 }
 
-Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint) {
+std::string Mission::deadReckoningText() const {
+  return fmt(dead_reckoning_.drivenM()) + " m and " + fmt(dead_reckoning_.turnedRad() * 180.0 / M_PI, 0) +
+         " deg since the scan: position +-" + fmt(dead_reckoning_.positionBoundM()) + " m, heading +-" +
+         fmt(dead_reckoning_.headingBoundRad() * 180.0 / M_PI, 1) + " deg";
+}
+
+Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<double> clearance_m) {
   for (int guard = 0; guard < 100; ++guard) {
     if (!checkControl()) return Drive::Failed;
     const Pose2D est = snapshot().estimate();
@@ -421,6 +427,17 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint) {
       }
     }
     double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
+    // The map's clearance of the leg: what the robot may be off its estimate and still pass. When
+    // odometry since the scan may be off by more (and the plain disc would pass), scan here first.
+    if (config_.leg_check && clearance_m && config_.leg_check_radius_m <= *clearance_m &&
+        dead_reckoning_.widenedRadius(config_.leg_check_radius_m, step) > *clearance_m &&
+        dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m) {
+      event("leg check: the map's clearance of the leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ") is " +
+                fmt(*clearance_m) + " m, within what odometry cannot see (" + deadReckoningText() +
+                "); not driving it, then scanning to re-localize",
+            true);
+      return Drive::Relocalize;
+    }
     const double free = freeTravel();
     if (free - config_.leg_check_margin_m < step) {
       const double allowed = std::max(0.0, free - config_.leg_check_margin_m);
@@ -431,10 +448,7 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint) {
       std::string what = "leg check: the latest scan shows an obstruction " + fmt(free) + " m ahead on the " +
                          fmt(step) + " m leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")";
       if (relocalize)
-        what += " within what odometry cannot see (" + fmt(dead_reckoning_.drivenM()) + " m and " +
-                fmt(dead_reckoning_.turnedRad() * 180.0 / M_PI, 0) + " deg since the scan: position +-" +
-                fmt(dead_reckoning_.positionBoundM()) + " m, heading +-" +
-                fmt(dead_reckoning_.headingBoundRad() * 180.0 / M_PI, 1) + " deg)";
+        what += " within what odometry cannot see (" + deadReckoningText() + ")";
       what += allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it";
       if (relocalize) what += ", then scanning to re-localize";
       event(what, true);
@@ -748,7 +762,9 @@ State Mission::run() {
       travel += (plan.waypoints[i] - from).norm();
       from = plan.waypoints[i];
       setPath(i, -1);
-      Drive drive = driveTo(plan.waypoints[i]);
+      const std::optional<double> clearance =
+          i < plan.clearance_m.size() ? std::optional<double>(plan.clearance_m[i]) : std::nullopt;
+      Drive drive = driveTo(plan.waypoints[i], clearance);
       while (drive == Drive::Relocalize) {
         // Scan where the robot stopped (its pose is then known again), then on to the same waypoint.
         // (Each time after relocalize_min_travel_m of driving: the robot gets on.)
@@ -757,7 +773,7 @@ State Mission::run() {
         save();
         if (!scanAndRegister()) break;
         setPath(i, -1);
-        drive = driveTo(plan.waypoints[i]);
+        drive = driveTo(plan.waypoints[i], clearance);
       }
       if (drive == Drive::Relocalize) {  // the re-localization scan failed
         if (!checkControl()) return finish(State::Aborted, "aborted by the user");

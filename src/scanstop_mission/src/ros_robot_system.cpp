@@ -275,6 +275,7 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
   copyStep(r, srv.response);
   for (const auto& p : srv.response.path.poses) r.waypoints.emplace_back(p.pose.position.x, p.pose.position.y);
   for (const auto flag : srv.response.scan_at) r.scan_at.push_back(flag != 0);
+  if (srv.response.clearance.size() == r.waypoints.size()) r.clearance_m = srv.response.clearance;
   r.target = Eigen::Vector2d(srv.response.target.pose.position.x, srv.response.target.pose.position.y);
   r.score = srv.response.score;
   r.complete = srv.response.exploration_complete;

@@ -65,6 +65,7 @@ class FakeSystem : public RobotSystem {
   int plan_failures_left = 0;
   bool always_fail_plan = false;
   bool insert_intermediate = false;               // add a mid-point landmark with scan_at = true
+  std::optional<double> leg_clearance;            // every plan's clearance of every leg (PlanResult::clearance_m)
   // SLAM
   std::vector<Pose2D> slam_poses;
   int lose_register_answers = 0;                  // store the scan but report failure this many times
@@ -222,6 +223,7 @@ class FakeSystem : public RobotSystem {
       }
       r.waypoints.push_back(targets[i]);
       r.scan_at.push_back(true);
+      if (leg_clearance) r.clearance_m.assign(r.waypoints.size(), *leg_clearance);
       r.score = 1.0;
       return r;
     }
@@ -590,6 +592,32 @@ TEST(Mission, AfterDrivingBlindTheRobotScansToRelocalizeAndGoesOnWithTheSamePath
   EXPECT_EQ(plain.relocalized, 0);
   EXPECT_TRUE(plain.reached);
   EXPECT_EQ(plain.unreachable, 0u);
+}
+
+TEST(Mission, ANarrowLegOfTheMapAfterDrivingBlindIsDrivenAfterAScan) {
+  // The latest scan shows nothing (a place it did not see), but the map says the 6 m path has 0.35 m
+  // of clearance: after 2 m on odometry alone the bounds exceed it, so the robot scans before the
+  // next step. With 1 m of clearance, or none given (a resumed path), it drives on.
+  const auto run = [](std::optional<double> clearance) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.targets = {{6.0, 0.0}};
+    sys.leg_clearance = clearance;
+    Mission m(config(dir.path()), sys, quiet, quiet);
+    m.run();
+    int relocalized = 0;
+    for (const auto& e : m.snapshot().events)
+      relocalized += e.what.find("the map's clearance of the leg") != std::string::npos &&
+                             e.what.find("then scanning to re-localize") != std::string::npos
+                         ? 1
+                         : 0;
+    EXPECT_TRUE(m.snapshot().unreachable.empty());
+    EXPECT_LT(std::hypot(sys.truth.x - 6.0, sys.truth.y), 0.3);
+    return relocalized;
+  };
+  EXPECT_GE(run(0.35), 1);
+  EXPECT_EQ(run(1.0), 0);
+  EXPECT_EQ(run(std::nullopt), 0);
 }
 
 TEST(Mission, AStopRightAfterAScanIsNoReasonToScanAgainThere) {

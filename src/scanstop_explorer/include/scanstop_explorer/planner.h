@@ -199,6 +199,10 @@ struct PlanResult {
   // the plan
   std::vector<Eigen::Vector2d> path;  ///< map-frame waypoints [m], robot position first, target last
   std::vector<bool> scan_at;          ///< per waypoint: scan there (intermediate landmarks and target)
+  /// Per waypoint: the clearance of the leg that ends there (the first: of the robot's own cell), the
+  /// smallest distance from it to anything that is not known floor (obstacles, contacts, unknown)
+  /// [m] (legClearance). What the robot may be off its estimate and still pass.
+  std::vector<double> clearance_m;
   cv::Point target_cell{-1, -1};
   Eigen::Vector2d target = Eigen::Vector2d::Zero();
   double score = 0.0;                 ///< b at the target (the argmax, before a target_clearance_m move)
@@ -226,6 +230,12 @@ PlanResult computeMaps(const PlanInput& input, const PlannerConfig& config);
 void choosePlan(PlanResult& result, const PlanInput& input, const PlannerConfig& config);
 /// computeMaps + choosePlan.
 PlanResult planStep(const PlanInput& input, const PlannerConfig& config);
+
+/// The smallest distance from the segment a-b (map frame) to a cell that is not floor, less a cell
+/// (the surface may lie anywhere in its cell, the leg anywhere in the cells it crosses: never more
+/// than the true distance) [m], from the squared distance transform of the floor (cells^2); 0 where
+/// the segment leaves the floor or the grid.
+double legClearance(const cv::Mat& sq_dt, const GridGeometry& geometry, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
 
 /// Rasterises blacklist discs on a grid. CV_8U 0/1.
 cv::Mat rasterizeDiscs(const GridGeometry& geometry, const std::vector<std::pair<Eigen::Vector2d, double>>& discs);

@@ -159,7 +159,9 @@ class Mission {
     Collision,   ///< the robot touched something (booked as a contact, backed off)
     Relocalize,  ///< stopped short: only what odometry cannot see made the leg unsafe; scan, go on
   };
-  Drive driveTo(const Eigen::Vector2d& waypoint);
+  /// `clearance_m`: the map's clearance of the leg (PlanResult::clearance_m), when known.
+  Drive driveTo(const Eigen::Vector2d& waypoint, std::optional<double> clearance_m);
+  std::string deadReckoningText() const;  ///< "x m and a deg since the scan: position +-p m, heading +-h deg"
   /// After a collision on a motion in direction `sign` (+1 forward, -1 backward, 0 a rotation):
   /// records the contact point (none for a rotation) and backs off by contact_backoff_m.
   void escapeContact(int sign, const std::string& what);

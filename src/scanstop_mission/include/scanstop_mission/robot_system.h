@@ -67,6 +67,8 @@ struct RegisterResult : StepResult {
 struct PlanResult : StepResult {
   std::vector<Eigen::Vector2d> waypoints;  ///< map frame [m], from the robot to the target
   std::vector<bool> scan_at;               ///< one flag per waypoint
+  /// Per waypoint: the map's clearance of the leg ending there [m] (PlanNext.clearance); empty: unknown.
+  std::vector<double> clearance_m;
   Eigen::Vector2d target = Eigen::Vector2d::Zero();
   double score = 0.0;
   bool complete = false;                   ///< exploration is complete
