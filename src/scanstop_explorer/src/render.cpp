@@ -250,7 +250,8 @@ std::string planToJson(const PlanResult& r) {
     << ", \"coverage_landmarks\": " << r.cost_map.coverage_landmarks << ", \"path\": [";
   for (size_t i = 0; i < r.path.size(); ++i)
     s << (i ? ", " : "") << "{\"x\": " << num(r.path[i].x()) << ", \"y\": " << num(r.path[i].y())
-      << ", \"scan\": " << (r.scan_at[i] ? "true" : "false") << "}";
+      << ", \"scan\": " << (r.scan_at[i] ? "true" : "false")
+      << (i < r.clearance_m.size() ? ", \"clearance_m\": " + num(r.clearance_m[i]) : std::string()) << "}";
   s << "], \"timings_ms\": {";
   for (size_t i = 0; i < r.timings_ms.size(); ++i)
     s << (i ? ", " : "") << quote(r.timings_ms[i].first) << ": " << num(r.timings_ms[i].second);

@@ -61,7 +61,7 @@ TEST(PlanStep, PlansOnAMapDirectoryAndPrintsJson) {
   }
   const ToolRun r = run(std::string(PLAN_STEP_EXE) + " " + dir + "/map " + dir + "/out --json --pose 1.0,1.0,0.0");
   ASSERT_EQ(r.status, 0) << r.out;
-  for (const char* key : {"\"success\": true", "\"complete\": false", "\"path\": [{\"x\": 1, \"y\": 1, \"scan\": false}",
+  for (const char* key : {"\"success\": true", "\"complete\": false", "\"path\": [{\"x\": 1, \"y\": 1, \"scan\": false, \"clearance_m\": ",
                           "\"target\"", "\"score\"", "\"coverage\""})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << " missing in " << r.out;
   for (const char* img : {"floor", "distance", "cost", "knowledge", "evaluation"})
