@@ -1,4 +1,4 @@
-// The icp_register and icp_replay command-line tools on bad input (issue #22): strict options and
+// The icp_register, icp_replay and relax_bench command-line tools on bad input (issue #22): strict options and
 // --help (class 7), strict map loading with --skip-bad (class 2), messages naming the file (class 6).
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -85,6 +85,7 @@ std::string makeMap(const std::string& dir, size_t scans) {
 
 const std::string kRegister = ICP_REGISTER_EXE;
 const std::string kReplay = ICP_REPLAY_EXE;
+const std::string kRelaxBench = RELAX_BENCH_EXE;
 
 }  // namespace
 
@@ -229,4 +230,39 @@ TEST(IcpReplayCli, IsolatedRegistersEachScanAloneAndFromSkipsTheEarlierOnes) {
   r = run(kReplay + " " + map + " --truth " + tmp.file("truth.yaml") + " --from 3");
   EXPECT_EQ(r.status, 2) << r.out;
   EXPECT_NE(r.out.find("--from needs --isolated"), std::string::npos) << r.out;
+}
+
+// Issue #17 point 4: relax_bench solves the relaxation's graph with ours and with PCL's LUM from the
+// same start poses. The stored poses claim 5 cm per scan; every scan is really at the origin, and
+// every edge (a pairwise registration of the same room) says so: both solvers bring the start
+// poses' 9.4 cm RMS / 15 cm max back to the truth.
+TEST(RelaxBenchCli, BothSolversCorrectTheStoredPosesOnTheSameGraph) {
+  TempDir tmp;
+  const std::string map = makeMap(tmp.file("map"), 4);
+  std::string truth = "scans:\n";
+  for (int i = 0; i < 4; ++i) truth += "  - index: " + std::to_string(i) + "\n    true_pose: [0, 0, 0]\n";
+  writeFileAtomic(tmp.file("truth.yaml"), truth);
+  CliRun r = run(kRelaxBench + " " + map);
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_NE(r.out.find("--truth mission_state.yaml is required"), std::string::npos) << r.out;
+  r = run(kRelaxBench + " " + map + " --truth " + tmp.file("truth.yaml") + " --lum-rounds 0");
+  EXPECT_EQ(r.status, 2) << r.out;
+  r = run(kRelaxBench + " " + map + " --truth " + tmp.file("missing.yaml"));
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("missing.yaml"), std::string::npos) << r.out;
+  r = run(kRelaxBench + " " + map + " --truth " + tmp.file("truth.yaml"));
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("4 scans, 3 edges"), std::string::npos) << r.out;
+  const auto rmsOf = [&](const std::string& row) {
+    const size_t at = r.out.find(row);
+    if (at == std::string::npos) return -1.0;
+    const size_t v = r.out.find("ATE RMS", at);
+    return v == std::string::npos ? -1.0 : std::stod(r.out.substr(v + 7));
+  };
+  EXPECT_NEAR(rmsOf("start poses"), 9.35, 0.01) << r.out;
+  const double ours = rmsOf("ours (PoseGraph"), lum = rmsOf("PCL LUM (6 dof");
+  EXPECT_GE(ours, 0.0) << r.out;
+  EXPECT_LT(ours, 0.5) << r.out;  // cm
+  EXPECT_GE(lum, 0.0) << r.out;
+  EXPECT_LT(lum, 0.5) << r.out;
 }

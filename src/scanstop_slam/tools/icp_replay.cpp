@@ -4,7 +4,6 @@
 /// mission_state.yaml holding true_pose per scan, written by mission_node in simulation) it prints
 /// the error of the replayed, the stored and the odometry-only pose against ground truth.
 #include <sys/resource.h>
-#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdio>
@@ -19,6 +18,7 @@
 #include "scanstop_common/map_check.h"
 #include "scanstop_common/options.h"
 #include "scanstop_slam/icp_slam.h"
+#include "truth_file.h"  // eval/: ground truth, not SLAM
 
 using namespace scanstop;
 
@@ -46,44 +46,6 @@ constexpr const char* kUsage =
     "              default: refuse such a map, naming the first problem\n"
     "  numbers are checked against the ranges of the SLAM configuration (an error names option, value and range)\n"
     "exit status: 0 replayed, 2 bad arguments, 1 unreadable or bad input\n";
-
-/// True poses by scan index (a scan the mission adopted after a crash may have none). Every problem
-/// names the file (yaml-cpp's own messages only give a line and column).
-std::vector<std::optional<Pose2D>> readTruth(const std::string& path) {
-  std::vector<std::optional<Pose2D>> out;
-  YAML::Node root;
-  const std::string problem = inputFileProblem(path);  // a directory: libstdc++'s "basic_filebuf::underflow"
-  if (!problem.empty()) throw IoError(path, problem);
-  try {
-    root = YAML::Load(readFile(path));
-  } catch (const YAML::Exception& e) {
-    throw IoError(path, std::string("not valid YAML: ") + e.what());
-  }
-  if (!root.IsMap() || !root["scans"] || !root["scans"].IsSequence())
-    throw IoError(path, "has no 'scans' list (not a mission_state.yaml?)");
-  size_t k = 0;
-  for (const auto& s : root["scans"]) {
-    const std::string where = "scans[" + std::to_string(k++) + "]";
-    try {
-      const double index_value = s["index"].as<double>();
-      if (!(index_value >= 0 && index_value <= 9999999 && index_value == std::floor(index_value)))
-        throw IoError(path, where + ": index " + s["index"].as<std::string>() + " is not an integer from 0 to 9999999");
-      const size_t index = static_cast<size_t>(index_value);
-      if (index >= out.size()) out.resize(index + 1);
-      const auto p = s["true_pose"];
-      if (p && p.size() == 3) {
-        const Pose2D pose(p[0].as<double>(), p[1].as<double>(), p[2].as<double>());
-        if (!pose.isFinite() || std::abs(pose.x) > 1e4 || std::abs(pose.y) > 1e4)
-          throw IoError(path, where + " (scan " + std::to_string(index) + "): true_pose " + pose.toString() +
-                                  " is not finite or beyond the 10000 m pose limit");
-        out[index] = pose;
-      }
-    } catch (const YAML::Exception& e) {
-      throw IoError(path, where + ": " + e.what());
-    }
-  }
-  return out;
-}
 
 double posErr(const Pose2D& a, const Pose2D& b) { return std::hypot(a.x - b.x, a.y - b.y); }
 double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAngle(a.yaw - b.yaw)) * 180.0 / M_PI; }
@@ -208,7 +170,7 @@ int main(int argc, char** argv) {
     const MapDirectory in =
         openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "icp_replay: warning: " << w << "\n"; });
     std::vector<std::optional<Pose2D>> truth;
-    if (!truth_path.empty()) truth = readTruth(truth_path);
+    if (!truth_path.empty()) truth = slam_eval::readTruth(truth_path);
     if (isolated_from > 0 && isolated.empty()) {
       std::cerr << "icp_replay: --from needs --isolated (a full replay registers every scan)\n";
       return kExitUsage;

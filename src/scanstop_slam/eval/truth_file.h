@@ -1,0 +1,34 @@
+#pragma once
+/// Ground truth for the offline SLAM tools (icp_replay, relax_bench): the true pose of every scan as
+/// mission_node writes it in simulation (mission_state.yaml, `scans: [{index, true_pose: [x, y,
+/// yaw]}, ...]`), and the pose error of a trajectory against it. Evaluation, not SLAM: the core
+/// (scanstop_slam_core) never sees it.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scanstop_common/pose.h"
+
+namespace scanstop {
+namespace slam_eval {
+
+/// True poses by scan index (a scan the mission adopted after a crash may have none). Throws
+/// IoError naming the file (and the scan entry) for a missing or unreadable file, YAML that is not
+/// a mission state, a bad index or a pose that is not finite or beyond 10 km.
+std::vector<std::optional<Pose2D>> readTruth(const std::string& path);
+
+/// Pose error over the scans that have a true pose (ATE, no alignment: both trajectories start in
+/// the same frame).
+struct TrajectoryError {
+  size_t scans = 0;        ///< scans with a true pose
+  double rms_m = 0.0;      ///< position RMS [m]
+  double max_m = 0.0;      ///< largest position error [m]
+  size_t max_at = 0;       ///< position (in the input order) of the largest error
+  double yaw_rms_deg = 0.0;
+  double yaw_max_deg = 0.0;
+};
+/// poses[i] against truth[i] (nullopt: no truth, skipped); the two must have the same size.
+TrajectoryError trajectoryError(const std::vector<Pose2D>& poses, const std::vector<std::optional<Pose2D>>& truth);
+
+}  // namespace slam_eval
+}  // namespace scanstop
