@@ -55,6 +55,7 @@ void MissionConfig::validate() const {
   requireInRange("leg_check_drift", leg_check_drift, 0.0, 0.5, "rad/m");
   requireInRange("leg_check_distance_error", leg_check_distance_error, 0.0, 0.5);
   requireInRange("relocalize_min_travel", relocalize_min_travel_m, 0.0, 100.0, "m");
+  requireInRange("relocalize_min_turn", relocalize_min_turn_rad, 0.0, 2 * M_PI, "rad");
   requireInRange("retry_backoff", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
   requireInRange("max_cycles", max_cycles, 1, 1000000);
@@ -431,7 +432,8 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
     // odometry since the scan may be off by more (and the plain disc would pass), scan here first.
     if (config_.leg_check && clearance_m && config_.leg_check_radius_m <= *clearance_m &&
         dead_reckoning_.widenedRadius(config_.leg_check_radius_m, step) > *clearance_m &&
-        dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m) {
+        (dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m ||
+         dead_reckoning_.turnedRad() >= config_.relocalize_min_turn_rad)) {
       event("leg check: the map's clearance of the leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ") is " +
                 fmt(*clearance_m) + " m, within what odometry cannot see (" + deadReckoningText() +
                 "); not driving it, then scanning to re-localize",
@@ -508,19 +510,28 @@ double Mission::freeTravel(bool dead_reckoning) const {
 }
 
 void Mission::noteMotion(const MotionResult& r, bool leg) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  state_.modelled_time_s += r.duration_s;
-  if (r.success || r.collision) {
-    dead_reckoning_.add(state_.odom_now.inverse() * r.odom_pose);
-    state_.odom_now = r.odom_pose;
+  Pose2D estimate;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.modelled_time_s += r.duration_s;
+    if (r.success || r.collision) {
+      dead_reckoning_.add(state_.odom_now.inverse() * r.odom_pose);
+      state_.odom_now = r.odom_pose;
+    }
+    if (!r.true_clearance_m) return;
+    const double c = *r.true_clearance_m;
+    ++state_.clearance_motions;
+    if (state_.min_clearance_m < 0.0 || c < state_.min_clearance_m) state_.min_clearance_m = c;
+    if (!leg) return;
+    ++state_.clearance_legs;
+    if (c >= MissionConfig::kCloseLeg) return;
+    ++state_.close_legs;
+    estimate = state_.estimate();
   }
-  if (!r.true_clearance_m) return;
-  const double c = *r.true_clearance_m;
-  ++state_.clearance_motions;
-  if (state_.min_clearance_m < 0.0 || c < state_.min_clearance_m) state_.min_clearance_m = c;
-  if (!leg) return;
-  ++state_.clearance_legs;
-  if (c < MissionConfig::kCloseLeg) ++state_.close_legs;
+  // Simulation only (the clearance is ground truth): where the near misses were, for the figures.
+  event("near miss (ground truth): the body passed " + fmt(*r.true_clearance_m * 100.0, 1) +
+        " cm from the world on this leg, ending at (" + fmt(estimate.x) + ", " + fmt(estimate.y) + ") by the estimate (" +
+        deadReckoningText() + ")");
 }
 
 void Mission::escapeContact(int sign, const std::string& what) {

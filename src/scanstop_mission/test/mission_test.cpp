@@ -620,6 +620,35 @@ TEST(Mission, ANarrowLegOfTheMapAfterDrivingBlindIsDrivenAfterAScan) {
   EXPECT_EQ(run(std::nullopt), 0);
 }
 
+TEST(Mission, ANarrowLegOfTheMapRightAfterALargeTurnIsDrivenAfterAScan) {
+  // The target lies behind the robot: a 180 deg turn right after the scan, then a leg whose map
+  // clearance (0.31 m) holds the plain disc but not the heading the turn may have got wrong. The
+  // robot has not driven since the scan, yet it scans after the turn (relocalize_min_turn), then
+  // drives. With the rule off (2 pi) it drives at once (the travel rule may still stop it later).
+  const auto run = [](double min_turn_rad) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.targets = {{-2.0, 0.0}};
+    sys.leg_clearance = 0.31;
+    MissionConfig c = config(dir.path());
+    c.relocalize_min_turn_rad = min_turn_rad;
+    Mission m(c, sys, quiet, quiet);
+    m.run();
+    int relocalized = 0;
+    for (const auto& e : m.snapshot().events)
+      relocalized += e.what.find("the map's clearance of the leg") != std::string::npos &&
+                             e.what.find("(0.00 m and 178 deg since the scan") != std::string::npos &&
+                             e.what.find("then scanning to re-localize") != std::string::npos
+                         ? 1
+                         : 0;
+    EXPECT_TRUE(m.snapshot().unreachable.empty());
+    EXPECT_LT(std::hypot(sys.truth.x + 2.0, sys.truth.y), 0.3);
+    return relocalized;
+  };
+  EXPECT_EQ(run(M_PI / 2), 1);
+  EXPECT_EQ(run(2 * M_PI), 0);
+}
+
 TEST(Mission, AStopRightAfterAScanIsNoReasonToScanAgainThere) {
   // A wall 0.30 m beside a 2 m leg after a 180 deg turn: the widened disc stops the leg, but the robot
   // has not driven since its scan (relocalize_min_travel): the target is marked unreachable, as for
@@ -725,6 +754,12 @@ TEST(Mission, TheTrueClearanceOfEveryMotionIsSummarized) {
   EXPECT_EQ(s.clearance_legs, forwards);
   EXPECT_EQ(s.close_legs, long_legs);
   EXPECT_NEAR(s.min_clearance_m, 0.021, 1e-12);
+  // Every close leg is in the log with its clearance (rotations are not legs).
+  int near_misses = 0;
+  for (const auto& e : s.events)
+    if (e.what.rfind("near miss (ground truth): the body passed 4.0 cm", 0) == 0) ++near_misses;
+  EXPECT_EQ(near_misses, long_legs);
+  EXPECT_NE(readFile(dir.path() + "/mission.log").find("near miss (ground truth)"), std::string::npos);
   const Summary sum = summarize(s);
   EXPECT_TRUE(sum.has_clearance);
   const std::string json = toJson(sum);

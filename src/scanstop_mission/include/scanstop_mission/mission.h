@@ -84,6 +84,11 @@ struct MissionConfig {
   /// be clear), after at least this much driving since the scan: the robot scans there to
   /// re-localize and goes on with the same path (the target is not marked unreachable). [m], [0, 100]
   double relocalize_min_travel_m = 0.5;
+  /// ... or, for a leg whose map clearance (PlanNext.clearance) the bounds do not hold, after at
+  /// least this much turning since the scan (a scan after the turn measures the heading the turn
+  /// got wrong: furnished_3 seed 4 drove back out of a 0.6 m niche after a 175 deg turn and passed
+  /// 0.0 cm from a shelf). [rad], [0, 2 pi]; 2 pi: off
+  double relocalize_min_turn_rad = M_PI / 2;
   /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
   static constexpr double kCloseLeg = 0.05;
   int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
