@@ -50,6 +50,16 @@ constexpr const char* kUsage =
 double posErr(const Pose2D& a, const Pose2D& b) { return std::hypot(a.x - b.x, a.y - b.y); }
 double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAngle(a.yaw - b.yaw)) * 180.0 / M_PI; }
 
+/// The weakest direction of a degenerate registration in the map frame, unit length in the pose
+/// parameters (x, y [m], yaw [rad]), or "".
+std::string weakText(const slam::Registration& r) {
+  if (!r.degenerate || r.weak_direction.size() < 3) return "";
+  char buf[96];
+  std::snprintf(buf, sizeof buf, " along (%.2f, %.2f, %.2f)", r.weak_direction(0), r.weak_direction(1),
+                r.weak_direction(r.weak_direction.size() - 1));
+  return buf;
+}
+
 /// --isolated: every scan registered alone against the earlier scans at their true poses.
 int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2D>>& truth, const slam::SlamConfig& config,
                    bool from_truth, size_t max_scans, size_t from, bool quiet) {
@@ -72,9 +82,10 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
       const double e = posErr(r.map_pose, *t), y = yawErrDeg(r.map_pose, *t);
       if (!quiet)
         std::printf("scan %3zu: %s err %5.1f cm (dx %5.1f dy %5.1f) %5.2f deg, guess off %5.1f cm, it %3d, overlap %.2f, "
-                    "condition %.2f%s\n",
+                    "condition %.2f%s%s\n",
                     i, r.converged ? "ok    " : "FAILED", e * 100, (r.map_pose.x - t->x) * 100, (r.map_pose.y - t->y) * 100, y,
-                    posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.degenerate ? " degenerate" : "");
+                    posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.degenerate ? " degenerate" : "",
+                    weakText(r).c_str());
       failed += r.converged ? 0 : 1;
       sum2 += e * e;
       sum2_yaw += y * y;
