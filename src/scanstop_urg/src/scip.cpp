@@ -82,7 +82,9 @@ void LineSplitter::feed(const char* data, size_t size, const std::function<void(
       if (overflow_) {
         overflow_ = false;  // the end of a garbage line: drop it
       } else {
-        if (!buffer_.empty() && buffer_.back() == '\r') buffer_.pop_back();
+        // Every CR before the LF: a command ended "...\r\r\n" must not keep CRs the device then echoes
+        // (the host would not recognise its own echo; found by the SCIP fuzzer).
+        while (!buffer_.empty() && buffer_.back() == '\r') buffer_.pop_back();
         const std::string line = std::move(buffer_);
         buffer_.clear();
         on_line(line);

@@ -292,6 +292,18 @@ TEST(Scip, LineSplitterHandlesCrLfPartialsAndGarbage) {
   EXPECT_EQ(s.overflows(), 1u);
 }
 
+// Found by the SCIP fuzzer in CI: "MS...;tag\r\r\r\n" kept six CRs in the line, the emulator echoed
+// them in every scan message, and the host's reader, cutting one CR, did not recognise its own echo.
+TEST(Scip, LineSplitterDropsEveryCrBeforeTheLf) {
+  LineSplitter s;
+  std::vector<std::string> lines;
+  const std::string in = "MS0010020003005;x00440S\r\r\r\r\r\r\r\r\nA\rB\r\n";
+  s.feed(in.data(), in.size(), [&](const std::string& l) { lines.push_back(l); });
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "MS0010020003005;x00440S");
+  EXPECT_EQ(lines[1], "A\rB");  // a CR inside the line stays
+}
+
 TEST(Scip, ErrorCodesAndStatusMeanings) {
   EXPECT_STREQ(errorCodeMeaning(1), "reflection too weak");
   EXPECT_STREQ(errorCodeMeaning(19), "step cannot be measured");

@@ -54,7 +54,7 @@ bool decodeValue(std::string_view text, uint32_t* value);
 /// Cuts an encoded value string into data lines of at most 64 characters, each with its sum and LF.
 std::string encodeDataBlock(std::string_view encoded);
 
-/// Splits a byte stream into LF-terminated lines (LF removed; a CR before the LF removed too).
+/// Splits a byte stream into LF-terminated lines (LF removed; any CRs right before the LF removed too).
 /// A line longer than `max_line` is garbage: it is dropped up to the next LF and counted.
 class LineSplitter {
  public:
