@@ -50,13 +50,18 @@ constexpr const char* kUsage =
 double posErr(const Pose2D& a, const Pose2D& b) { return std::hypot(a.x - b.x, a.y - b.y); }
 double yawErrDeg(const Pose2D& a, const Pose2D& b) { return std::abs(normalizeAngle(a.yaw - b.yaw)) * 180.0 / M_PI; }
 
-/// The weakest direction of a degenerate registration in the map frame, unit length in the pose
-/// parameters (x, y [m], yaw [rad]), or "".
-std::string weakText(const slam::Registration& r) {
+/// A degenerate registration's weak direction, in the map frame (the registration reports it in
+/// the scan's frame at its result; unit length in x, y [m], yaw [rad]) and the errors of the guess
+/// and the result along it, or "" for a well-constrained registration.
+std::string weakText(const slam::Registration& r, const Pose2D& truth) {
   if (!r.degenerate || r.weak_direction.size() < 3) return "";
-  char buf[96];
-  std::snprintf(buf, sizeof buf, " along (%.2f, %.2f, %.2f)", r.weak_direction(0), r.weak_direction(1),
-                r.weak_direction(r.weak_direction.size() - 1));
+  const double c = std::cos(r.map_pose.yaw), s = std::sin(r.map_pose.yaw);
+  const double wx = r.weak_direction(0), wy = r.weak_direction(1);
+  const double mx = c * wx - s * wy, my = s * wx + c * wy, norm = std::hypot(mx, my);
+  auto along = [&](const Pose2D& p) { return norm > 0 ? ((p.x - truth.x) * mx + (p.y - truth.y) * my) / norm : 0.0; };
+  char buf[160];
+  std::snprintf(buf, sizeof buf, " along (%.2f, %.2f, %.2f) in the map; error along it: guess %.1f cm, result %.1f cm", mx,
+                my, r.weak_direction(r.weak_direction.size() - 1), along(r.guess) * 100, along(r.map_pose) * 100);
   return buf;
 }
 
@@ -85,7 +90,7 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
                     "condition %.2f%s%s\n",
                     i, r.converged ? "ok    " : "FAILED", e * 100, (r.map_pose.x - t->x) * 100, (r.map_pose.y - t->y) * 100, y,
                     posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.degenerate ? " degenerate" : "",
-                    weakText(r).c_str());
+                    weakText(r, *t).c_str());
       failed += r.converged ? 0 : 1;
       sum2 += e * e;
       sum2_yaw += y * y;
