@@ -876,8 +876,9 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   PlaneEquations final_eq = planeEquations(source, pairs, T, skip_horizontal);
   summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
   if (result.converged && config.degeneracy_remap && result.weak_directions > 0) {
-    // Point-to-point moved along weak directions as freely as along the others (and an earlier
-    // stage, given as prior, may have): undo that. The correction, taken at the result (T^-1 keep,
+    // Point-to-point moved along weak directions as freely as along the others, an earlier stage
+    // given as prior may have, and point-to-plane's steps were projected onto the strong directions
+    // of each iteration's pairs, which turn as the pairs change: undo that. The correction, taken at the result (T^-1 keep,
     // the pose parameters of IcpConfig at T, where the information matrix was evaluated), goes back
     // to the guess along the weak eigenvectors (their span, W = A V_weak); the well-constrained
     // part of the result stays. "Back to the guess" is measured at the source frame's origin, the
