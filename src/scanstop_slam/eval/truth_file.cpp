@@ -71,5 +71,18 @@ TrajectoryError trajectoryError(const std::vector<Pose2D>& poses, const std::vec
   return e;
 }
 
+MeasurementError measurementError(const Pose2D& true_from, const Pose2D& true_to, const Pose2D& measured,
+                                  const Eigen::Matrix3d& information) {
+  const double c = std::cos(true_from.yaw), s = std::sin(true_from.yaw);
+  const double dx = true_to.x - true_from.x, dy = true_to.y - true_from.y;
+  MeasurementError m;
+  m.residual = Eigen::Vector3d(c * dx + s * dy - measured.x, -s * dx + c * dy - measured.y,
+                               normalizeAngle(true_to.yaw - true_from.yaw - measured.yaw));
+  m.position_m = std::hypot(m.residual.x(), m.residual.y());
+  m.yaw_deg = std::abs(m.residual.z()) * 180.0 / M_PI;
+  m.whitened = std::sqrt(std::max(0.0, m.residual.dot(information * m.residual)));
+  return m;
+}
+
 }  // namespace slam_eval
 }  // namespace scanstop

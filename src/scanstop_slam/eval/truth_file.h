@@ -3,6 +3,7 @@
 /// mission_node writes it in simulation (mission_state.yaml, `scans: [{index, true_pose: [x, y,
 /// yaw]}, ...]`), and the pose error of a trajectory against it. Evaluation, not SLAM: the core
 /// (scanstop_slam_core) never sees it.
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,20 @@ struct TrajectoryError {
 };
 /// poses[i] against truth[i] (nullopt: no truth, skipped); the two must have the same size.
 TrajectoryError trajectoryError(const std::vector<Pose2D>& poses, const std::vector<std::optional<Pose2D>>& truth);
+
+/// How wrong one relative pose measurement (a pose graph edge: node `to` in node `from`'s frame) is
+/// against the true poses of its two nodes, with the residual exactly as PoseGraph counts it
+/// (pose_graph.h): e = [R(yaw_from)^T (t_to - t_from) - t_z; yaw_to - yaw_from - yaw_z].
+struct MeasurementError {
+  Eigen::Vector3d residual = Eigen::Vector3d::Zero();  ///< e at the true poses [m, m, rad]
+  double position_m = 0.0;  ///< |e.xy| [m]
+  double yaw_deg = 0.0;     ///< |e.yaw| [deg]
+  /// sqrt(e^T information e): how many of its own standard deviations the measurement is off
+  /// (about 1 for an honest information matrix; far more: overconfident) [1]
+  double whitened = 0.0;
+};
+MeasurementError measurementError(const Pose2D& true_from, const Pose2D& true_to, const Pose2D& measured,
+                                  const Eigen::Matrix3d& information);
 
 }  // namespace slam_eval
 }  // namespace scanstop

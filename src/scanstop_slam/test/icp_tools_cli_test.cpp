@@ -83,6 +83,13 @@ std::string makeMap(const std::string& dir, size_t scans) {
   return dir;
 }
 
+/// A mission_state.yaml whose scans 0 .. scans-1 all truly stand at the origin.
+void writeTruthAtOrigin(const std::string& path, size_t scans) {
+  std::string truth = "scans:\n";
+  for (size_t i = 0; i < scans; ++i) truth += "  - index: " + std::to_string(i) + "\n    true_pose: [0, 0, 0]\n";
+  writeFileAtomic(path, truth);
+}
+
 const std::string kRegister = ICP_REGISTER_EXE;
 const std::string kReplay = ICP_REPLAY_EXE;
 const std::string kRelaxBench = RELAX_BENCH_EXE;
@@ -208,9 +215,7 @@ TEST(IcpReplayCli, ABadTruthFileIsNamed) {
 TEST(IcpReplayCli, IsolatedRegistersEachScanAloneAndFromSkipsTheEarlierOnes) {
   TempDir tmp;
   const std::string map = makeMap(tmp.file("map"), 4);
-  std::string truth = "scans:\n";
-  for (int i = 0; i < 4; ++i) truth += "  - index: " + std::to_string(i) + "\n    true_pose: [0, 0, 0]\n";
-  writeFileAtomic(tmp.file("truth.yaml"), truth);
+  writeTruthAtOrigin(tmp.file("truth.yaml"), 4);
   CliRun r = run(kReplay + " " + map + " --isolated odometry");
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.out.find("--isolated needs --truth"), std::string::npos) << r.out;
@@ -239,9 +244,7 @@ TEST(IcpReplayCli, IsolatedRegistersEachScanAloneAndFromSkipsTheEarlierOnes) {
 TEST(RelaxBenchCli, BothSolversCorrectTheStoredPosesOnTheSameGraph) {
   TempDir tmp;
   const std::string map = makeMap(tmp.file("map"), 4);
-  std::string truth = "scans:\n";
-  for (int i = 0; i < 4; ++i) truth += "  - index: " + std::to_string(i) + "\n    true_pose: [0, 0, 0]\n";
-  writeFileAtomic(tmp.file("truth.yaml"), truth);
+  writeTruthAtOrigin(tmp.file("truth.yaml"), 4);
   CliRun r = run(kRelaxBench + " " + map);
   EXPECT_EQ(r.status, 2) << r.out;
   EXPECT_NE(r.out.find("--truth mission_state.yaml is required"), std::string::npos) << r.out;
@@ -265,4 +268,13 @@ TEST(RelaxBenchCli, BothSolversCorrectTheStoredPosesOnTheSameGraph) {
   EXPECT_LT(ours, 0.5) << r.out;  // cm
   EXPECT_GE(lum, 0.0) << r.out;
   EXPECT_LT(lum, 0.5) << r.out;
+  // The edges against the true poses (all 3 are chain edges here, each right to under a millimetre),
+  // and the graph solved from the truth stays there.
+  const size_t chain = r.out.find("edges at the true poses, chain    3: position RMS");
+  ASSERT_NE(chain, std::string::npos) << r.out;
+  EXPECT_LT(std::stod(r.out.substr(chain + 49)), 0.1) << r.out;  // cm
+  EXPECT_NE(r.out.find("edges at the true poses, loop     0"), std::string::npos) << r.out;
+  const double from_truth = rmsOf("ours from the true poses");
+  EXPECT_GE(from_truth, 0.0) << r.out;
+  EXPECT_LT(from_truth, 0.1) << r.out;
 }

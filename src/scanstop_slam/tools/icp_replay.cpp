@@ -263,19 +263,15 @@ int main(int argc, char** argv) {
       // poses as each scan was registered.
       const std::vector<slam::ScanPose> final_poses = slam.poses();
       const auto report = [&](const char* what, const std::function<Pose2D(size_t)>& pose) {
-        double sum2 = 0.0, max = 0.0, sum2_yaw = 0.0, max_yaw = 0.0;
-        size_t m = 0;
+        std::vector<Pose2D> at;
+        std::vector<std::optional<Pose2D>> true_at;
         for (size_t i = 0; i < n; ++i) {
-          if (!truthOf(i)) continue;
-          const double e = posErr(pose(i), *truthOf(i)), y = yawErrDeg(pose(i), *truthOf(i));
-          sum2 += e * e;
-          sum2_yaw += y * y;
-          max = std::max(max, e);
-          max_yaw = std::max(max_yaw, y);
-          ++m;
+          at.push_back(pose(i));
+          true_at.push_back(truthOf(i));
         }
-        std::printf("%-28s over %zu scans: position RMS %6.1f cm max %6.1f cm; yaw RMS %5.2f deg max %5.2f deg\n", what, m,
-                    std::sqrt(sum2 / m) * 100, max * 100, std::sqrt(sum2_yaw / m), max_yaw);
+        const slam_eval::TrajectoryError e = slam_eval::trajectoryError(at, true_at);
+        std::printf("%-28s over %zu scans: position RMS %6.1f cm max %6.1f cm; yaw RMS %5.2f deg max %5.2f deg\n", what,
+                    e.scans, e.rms_m * 100, e.max_m * 100, e.yaw_rms_deg, e.yaw_max_deg);
       };
       report("error, final poses", [&](size_t i) { return final_poses.at(i).map_pose; });
       report("error, as registered", [&](size_t i) { return poses[i]; });
