@@ -44,11 +44,15 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: relax_bench MAP_DIR --truth mission_state.yaml [--start stored|replay] [--scans N]\n"
+    "                   [--neighbours N] [--loop-candidates N] [--loop-min-gap N] [--max-distance M]\n"
+    "                   [--loss cauchy|huber|none] [--loss-scale S]\n"
     "                   [--lum-voxel M] [--lum-corr M] [--lum-iterations N] [--lum-rounds N] [--skip-bad] [--verbose]\n"
     "  Replays MAP_DIR with the SLAM defaults to build the relaxation's pose graph, then solves it\n"
     "  from the same start poses with ours (Ceres, 3 dof) and PCL's LUM (6 dof) and prints the pose\n"
     "  error of every scan (ATE) and the time of each.\n"
     "  --start: the run's stored poses (default: what the live SLAM gave) or the replay's\n"
+    "  --neighbours ... --loss-scale: the graph's SlamConfig relax_* / PoseGraphConfig settings\n"
+    "  (defaults: the SLAM's; icp_slam.h)\n"
     "  --lum-voxel: LUM's cloud voxel filter [m] (default 0.1); --lum-corr: nearest-neighbour\n"
     "  correspondence distance [m] (default 0.1); --lum-iterations: per round (default 1);\n"
     "  --lum-rounds: correspondence rounds (default 5); --verbose: LUM's error after every round\n"
@@ -146,6 +150,7 @@ int main(int argc, char** argv) {
   double lum_voxel = 0.1, lum_corr = 0.1;
   int lum_iterations = 1, lum_rounds = 5;
   bool skip_bad = false, verbose = false;
+  slam::SlamConfig relax;  // the relaxation settings of the graph (the SLAM defaults unless given)
   Options opts("relax_bench", kUsage);
   opts.positional("MAP_DIR", map_dir)
       .text("--truth", truth_path)
@@ -155,6 +160,12 @@ int main(int argc, char** argv) {
       .real("--lum-corr", lum_corr, 0.001, 5.0)
       .integer("--lum-iterations", lum_iterations, 1, 1000)
       .integer("--lum-rounds", lum_rounds, 1, 100)
+      .integer("--neighbours", relax.relax_neighbours, 0, 100)
+      .integer("--loop-candidates", relax.relax_loop_candidates, 0, 100)
+      .integer("--loop-min-gap", relax.relax_loop_min_gap, 2, 100000)
+      .real("--max-distance", relax.relax_max_distance_m, 0.001, 1000.0)
+      .real("--loss-scale", relax.graph.loss_scale, 1e-6, 1e6)
+      .choice("--loss", relax.graph.loss, {"cauchy", "huber", "none"})
       .flag("--skip-bad", skip_bad)
       .flag("--verbose", verbose);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
@@ -170,7 +181,7 @@ int main(int argc, char** argv) {
     if (n < 2) throw IoError(map_dir, "holds " + std::to_string(n) + " scan(s): a graph needs two");
 
     // 1. The graph: a replay with the relaxation's edges, its updates disabled.
-    slam::SlamConfig config;
+    slam::SlamConfig config = relax;
     config.relax = true;
     config.relax_update_m = 10.0;
     config.relax_update_rad = M_PI;
