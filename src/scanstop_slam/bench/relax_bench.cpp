@@ -15,6 +15,9 @@
 ///      again at LUM's poses between rounds, as PCL's ELCH/LUM examples do).
 /// 3. Prints the ATE (position RMS/max, yaw) of the start poses, of each solver's result and the
 ///    time of each (LUM: correspondence search included).
+/// 4. Prints how wrong the graph's edges are against the true poses (chain and loop edges: the
+///    residual in the first node's frame, its whitened size, the worst five) and the ATE of ours
+///    solved from the true poses (the graph's own minimum, whatever the start).
 ///
 /// Evaluation only (needs the true poses from mission_state.yaml); PCL's templates stay here.
 #include <pcl/filters/voxel_grid.h>
