@@ -356,6 +356,8 @@ void IcpConfig::validate() const {
   requirePositive("max_correction", max_correction_m, "m");
   requirePositive("max_correction_angle", max_correction_rad, "rad");
   requireInRange("degeneracy_ratio", degeneracy_ratio, 0.0, 1.0);
+  requireInRange("information_points", information_points, 1e-6, 1e6);
+  requireInRange("information_sigma", information_sigma_m, 1e-6, 1.0, "m");
 }
 
 namespace {
@@ -786,10 +788,78 @@ void summarize(IcpResult& result, const PlaneEquations& e, bool six_dof, double 
   result.degenerate = s.weak > 0;
 }
 
+/// Solution remapping, the hard form: T's correction from `keep` goes back to zero along the weak
+/// directions of s (their span, W = A V_weak); the well-constrained part of the result stays.
+/// "Back to the guess" is measured at the source frame's origin, the robot, where the odometry
+/// prior holds its position (a radian weighs as L metres, L the pairs' RMS distance from their
+/// centroid): not in the normalized parameters, whose rotation turns about the pairs' centroid.
+/// There, a yaw error of the guess that the registration corrected counted as a translation of the
+/// centroid, and restoring the centroid moved the robot along the weak axis (turtlebot3_house
+/// seed 4 scan 60: a 2.3 deg yaw error of the odometry leg, the centroid 1.4 m away, slid the
+/// robot 5.7 cm along a corridor, 9.2 cm from the truth).
+Eigen::Isometry3d remapToPrior(const Eigen::Isometry3d& T, const Spectrum& s, const Eigen::Isometry3d& keep,
+                               bool six_dof) {
+  const Eigen::VectorXd back = reduce(params(T.inverse() * keep), six_dof);
+  const Eigen::MatrixXd W = s.A * s.vectors.leftCols(s.weak);
+  const Eigen::Index dims = back.size(), rotations = six_dof ? 3 : 1;
+  const double L = 1.0 / s.A(dims - 1, dims - 1);
+  Eigen::VectorXd metric = Eigen::VectorXd::Ones(dims);
+  metric.tail(rotations).setConstant(L * L);
+  const Eigen::MatrixXd WtM = W.transpose() * metric.asDiagonal();
+  const Eigen::VectorXd alpha = (WtM * W).ldlt().solve(WtM * back);
+  return T * fromParams(expand(W * alpha, six_dof));
+}
+
+/// The weighed form (icp()'s prior_information): along the weak directions of s only, the step (in
+/// the normalized parameters of s) that minimizes the pairs' point-to-plane residuals, weighted as
+/// IcpConfig's information_points / information_sigma_m say (g_n: their gradient in the
+/// normalized parameters, count pairs), plus the prior's Mahalanobis distance; offset_n: the pose
+/// relative to the prior in those parameters (after the strong directions' step). The strong
+/// directions are left to the pairs alone: there the pairs know far more than odometry, and
+/// weighing the prior there pulled well-conditioned registrations centimetres towards the guess
+/// (office_loop seed 2, isolated: RMS 1.0 -> 1.3 cm) as correspondences changed under it.
+Eigen::VectorXd weakPriorStep(const Spectrum& s, const Eigen::VectorXd& g_n, size_t count,
+                              const Eigen::VectorXd& offset_n, const Eigen::MatrixXd& prior_information,
+                              const IcpConfig& config) {
+  const double w = config.information_points / (static_cast<double>(std::max<size_t>(count, 1)) *
+                                                config.information_sigma_m * config.information_sigma_m);
+  const Eigen::MatrixXd V = s.vectors.leftCols(s.weak);
+  const Eigen::MatrixXd Ln = s.A.transpose() * prior_information * s.A;  // the prior in normalized parameters
+  const Eigen::MatrixXd M = w * Eigen::MatrixXd(s.values.head(s.weak).asDiagonal()) + V.transpose() * Ln * V;
+  const Eigen::VectorXd b = w * V.transpose() * g_n + V.transpose() * Ln * offset_n;
+  return -V * M.ldlt().solve(b);
+}
+
+/// IcpConfig::prior_all_directions: one Gauss-Newton step of the pairs' point-to-plane residuals,
+/// weighted as information_points / information_sigma_m say, plus the prior's Mahalanobis
+/// distance from T's offset to the prior, in every direction: the reduced step d of
+/// T * fromParams(expand(d)).
+Eigen::VectorXd weightedStep(const PlaneEquations& e, const Eigen::Isometry3d& T, const Eigen::Isometry3d& prior,
+                             const Eigen::MatrixXd& prior_information, const IcpConfig& config) {
+  const double w = config.information_points / (static_cast<double>(std::max<size_t>(e.count, 1)) *
+                                                config.information_sigma_m * config.information_sigma_m);
+  const Eigen::MatrixXd H = reduce(e.H, config.six_dof) * w + prior_information;
+  const Eigen::VectorXd g =
+      reduce(e.g, config.six_dof) * w + prior_information * reduce(params(prior.inverse() * T), config.six_dof);
+  return -H.ldlt().solve(g);
+}
+
+/// The pose relative to the prior (keep^-1 T) in the normalized parameters of s.
+Eigen::VectorXd offsetFromPrior(const Eigen::Isometry3d& T, const Eigen::Isometry3d& keep, const Spectrum& s,
+                                bool six_dof) {
+  return s.A.fullPivLu().solve(reduce(params(keep.inverse() * T), six_dof));
+}
+
 }  // namespace
 
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
-              const IcpConfig& config, const Eigen::Vector3f* source_origin, const Eigen::Isometry3d* prior) {
+              const IcpConfig& config, const Eigen::Vector3f* source_origin, const Eigen::Isometry3d* prior,
+              const Eigen::MatrixXd* prior_information) {
+  const long dims = config.six_dof ? 6 : 3;
+  if (prior_information && (prior_information->rows() != dims || prior_information->cols() != dims || !prior_information->allFinite()))
+    throw std::invalid_argument("icp: the prior information must be a finite " + std::to_string(dims) + "x" +
+                                std::to_string(dims) + " matrix");
+  const Eigen::Isometry3d& keep = prior ? *prior : T_init;
   IcpResult result;
   Eigen::Isometry3d T = T_init;
   const long n = static_cast<long>(source.size());
@@ -813,6 +883,15 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
       result.T_target_source = T_init;
       return result;
     }
+    if (plane && prior_information && config.prior_all_directions) {
+      const Vector6d d6 = expand(weightedStep(eq, T, keep, *prior_information, config), config.six_dof);
+      T = T * fromParams(d6);
+      if (d6.head<3>().norm() < config.t_c_m && d6.tail<3>().norm() < config.r_c_rad) {
+        result.converged = true;
+        break;
+      }
+      continue;
+    }
     if (plane) {
       // Gauss-Newton step H d = -g, solved in H's eigenbasis. With degeneracy_remap the weak
       // directions get no step (solution remapping: the step projected onto the well-constrained
@@ -821,11 +900,14 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
       // (In the normalized parameters of the eigen-analysis: H_n = A^T H A, g_n = A^T g, d = A d_n.)
       const Spectrum s = spectrum(eq, config.six_dof, config.degeneracy_ratio);
       const Eigen::VectorXd g = s.A.transpose() * reduce(eq.g, config.six_dof);
-      const int first = config.degeneracy_remap ? s.weak : 0;
+      const int first = config.degeneracy_remap || prior_information ? s.weak : 0;
       if (first > 0) result.remapped = true;
       Eigen::VectorXd d = Eigen::VectorXd::Zero(g.size());
       for (int k = first; k < s.values.size(); ++k)
         if (s.values(k) > 1e-12 * s.largest()) d -= s.vectors.col(k) * (s.vectors.col(k).dot(g) / s.values(k));
+      // Weighed prior: the weak directions get what their few pairs and the prior say together.
+      if (prior_information && first > 0)
+        d += weakPriorStep(s, g, eq.count, offsetFromPrior(T, keep, s, config.six_dof) + d, *prior_information, config);
       const Vector6d d6 = expand(s.A * d, config.six_dof);
       T = T * fromParams(d6);
       if (d6.head<3>().norm() < config.t_c_m && d6.tail<3>().norm() < config.r_c_rad) {
@@ -875,30 +957,34 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   pairs.final(T, sum2, count);
   PlaneEquations final_eq = planeEquations(source, pairs, T, skip_horizontal);
   summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
-  if (result.converged && config.degeneracy_remap && result.weak_directions > 0) {
+  if (result.converged && prior_information && config.prior_all_directions) {
+    if (!plane) {  // point-to-point's optimum, combined with the prior by one step of the weighted objective
+      T = T * fromParams(expand(weightedStep(final_eq, T, keep, *prior_information, config), config.six_dof));
+      pairs.final(T, sum2, count);
+      final_eq = planeEquations(source, pairs, T, skip_horizontal);
+      summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
+    }
+    result.remapped = result.degenerate;
+  } else if (result.converged && result.weak_directions > 0 && (prior_information || config.degeneracy_remap)) {
     // Point-to-point moved along weak directions as freely as along the others, an earlier stage
     // given as prior may have, and point-to-plane's steps were projected onto the strong directions
-    // of each iteration's pairs, which turn as the pairs change: undo that. The correction, taken at the result (T^-1 keep,
-    // the pose parameters of IcpConfig at T, where the information matrix was evaluated), goes back
-    // to the guess along the weak eigenvectors (their span, W = A V_weak); the well-constrained
-    // part of the result stays. "Back to the guess" is measured at the source frame's origin, the
-    // robot, where the odometry prior holds its position (a radian weighs as L metres, L the pairs'
-    // RMS distance from their centroid): not in the normalized parameters, whose rotation turns
-    // about the pairs' centroid. There, a yaw error of the guess that the registration corrected
-    // counted as a translation of the centroid, and restoring the centroid moved the robot along
-    // the weak axis (turtlebot3_house seed 4 scan 60: a 2.3 deg yaw error of the odometry leg,
-    // the centroid 1.4 m away, slid the robot 5.7 cm along a corridor, 9.2 cm from the truth).
-    const Eigen::Isometry3d& keep = prior ? *prior : T_init;
+    // of each iteration's pairs, which turn as the pairs change: undo that. Along the weak
+    // eigenvectors of the final pairs the correction goes back to the prior (remapToPrior), or,
+    // with prior_information, to where the weak directions' pairs and the prior weigh it
+    // (weakPriorStep); the well-constrained part of the result stays.
     const Spectrum s = spectrum(final_eq, config.six_dof, config.degeneracy_ratio);
-    const Eigen::VectorXd back = reduce(params(T.inverse() * keep), config.six_dof);
-    const Eigen::MatrixXd W = s.A * s.vectors.leftCols(s.weak);
-    const Eigen::Index dims = back.size(), rotations = config.six_dof ? 3 : 1;
-    const double L = 1.0 / s.A(dims - 1, dims - 1);
-    Eigen::VectorXd metric = Eigen::VectorXd::Ones(dims);
-    metric.tail(rotations).setConstant(L * L);
-    const Eigen::MatrixXd WtM = W.transpose() * metric.asDiagonal();
-    const Eigen::VectorXd alpha = (WtM * W).ldlt().solve(WtM * back);
-    T = T * fromParams(expand(W * alpha, config.six_dof));
+    const Eigen::Isometry3d remapped = remapToPrior(T, s, keep, config.six_dof);
+    if (prior_information) {
+      const Eigen::VectorXd g_n = s.A.transpose() * reduce(final_eq.g, config.six_dof);
+      const Eigen::VectorXd step =
+          weakPriorStep(s, g_n, final_eq.count, offsetFromPrior(T, keep, s, config.six_dof), *prior_information, config);
+      T = T * fromParams(expand(s.A * step, config.six_dof));
+      const Eigen::Isometry3d gain = remapped.inverse() * T;
+      result.weak_gain_m = gain.translation().norm();
+      result.weak_gain_rad = Eigen::AngleAxisd(gain.linear()).angle();
+    } else {
+      T = remapped;
+    }
     result.remapped = true;
     pairs.final(T, sum2, count);
     final_eq = planeEquations(source, pairs, T, skip_horizontal);

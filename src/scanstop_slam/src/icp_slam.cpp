@@ -24,6 +24,12 @@ void SlamConfig::validate() const {
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
   requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
   requireInRange("odom_scale_min_travel", odom_scale_min_travel_m, 0.01, 100.0, "m");
+  requireInRange("prior_sigma", prior_sigma_m, 1e-6, 10.0, "m");
+  requireInRange("prior_sigma_per_m", prior_sigma_per_m, 0.0, 1.0);
+  requireInRange("prior_sigma_angle", prior_sigma_rad, 1e-6, M_PI, "rad");
+  requireInRange("prior_sigma_angle_per_rad", prior_sigma_rad_per_rad, 0.0, 1.0);
+  requireInRange("prior_sigma_angle_per_m", prior_sigma_rad_per_m, 0.0, 1.0, "rad/m");
+  requireInRange("prior_gate", prior_gate, 1e-6, 1e6);
   requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
   requireInRange("max_odom_jump", max_odom_jump_m, 0.01, 100000.0, "m");
   requireInRange("relax_neighbours", relax_neighbours, 0, 100);
@@ -136,8 +142,24 @@ std::vector<ScanPose> IcpSlam::poses() const {
   return out;
 }
 
+Eigen::MatrixXd IcpSlam::priorInformation(const Pose2D& odom_leg) const {
+  const double d = std::hypot(odom_leg.x, odom_leg.y), turn = std::abs(normalizeAngle(odom_leg.yaw));
+  const double s_m = std::hypot(config_.prior_sigma_m, config_.prior_sigma_per_m * d);
+  const double s_rad = std::sqrt(config_.prior_sigma_rad * config_.prior_sigma_rad +
+                                 std::pow(config_.prior_sigma_rad_per_rad * turn, 2) +
+                                 std::pow(config_.prior_sigma_rad_per_m * d, 2));
+  const double i_m = 1.0 / (s_m * s_m), i_rad = 1.0 / (s_rad * s_rad);
+  if (!config_.icp.six_dof) return Eigen::Vector3d(i_m, i_m, i_rad).asDiagonal();
+  const double i_z = 1.0 / (config_.prior_sigma_m * config_.prior_sigma_m);
+  const double i_tilt = 1.0 / (config_.prior_sigma_rad * config_.prior_sigma_rad);
+  Eigen::VectorXd diag(6);
+  diag << i_m, i_m, i_z, i_tilt, i_tilt, i_rad;
+  return diag.asDiagonal();
+}
+
 IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source,
-                                  const Eigen::Isometry3d& start, const Eigen::Vector3f& origin, Registration* r) const {
+                                  const Eigen::Isometry3d& start, const Eigen::Vector3f& origin, Registration* r,
+                                  const Eigen::MatrixXd* prior_information) const {
   Eigen::Isometry3d from = start;
   int coarse_iterations = 0;
   if (config_.coarse_c_max_m > config_.icp.c_max_m) {
@@ -147,7 +169,7 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
     if (config_.coarse_point_to_point) coarse.method = IcpMethod::point_to_point;
     coarse.t_c_m = std::max(coarse.t_c_m, 0.002);
     coarse.r_c_rad = std::max(coarse.r_c_rad, 0.1 * M_PI / 180.0);
-    const IcpResult c = icp(target, coarseSource(source), from, coarse, &origin);
+    const IcpResult c = icp(target, coarseSource(source), from, coarse, &origin, nullptr, prior_information);
     coarse_iterations = c.iterations;
     if (c.converged) from = c.T_target_source;
   }
@@ -155,7 +177,7 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
   // stage's result, along the weak directions of its own final pairs: the coarse stage's far pairs
   // must not slide a scan along a corridor (office_loop seed 1 scan 121: 4 cm off from odometry,
   // 16 cm after a coarse slide the fine pairs could not see).
-  IcpResult result = icp(target, source, from, config_.icp, &origin, &start);
+  IcpResult result = icp(target, source, from, config_.icp, &origin, &start, prior_information);
   result.iterations += coarse_iterations;
   if (result.converged && config_.refine_t_c_m > 0.0) {
     IcpConfig refine = config_.icp;
@@ -163,7 +185,7 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
     refine.t_c_m = config_.refine_t_c_m;
     refine.r_c_rad = config_.refine_r_c_rad;
     refine.max_iterations = config_.refine_max_iterations;
-    IcpResult refined = icp(target, refineSource(source), result.T_target_source, refine, &origin, &start);
+    IcpResult refined = icp(target, refineSource(source), result.T_target_source, refine, &origin, &start, prior_information);
     // Not settled within its iterations, or moved farther than a bias can be: the thesis stage's
     // result stands.
     const Eigen::Isometry3d moved = result.T_target_source.inverse() * refined.T_target_source;
@@ -197,8 +219,27 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
 
 void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, const Eigen::Vector3f& origin,
                            Registration& r) const {
-  const IcpResult icp_result =
-      registerStages(target, sample(scan_base.points, config_.source_voxel_m), r.guess.toIsometry3d(), origin, &r);
+  const std::vector<Eigen::Vector3f> source = sample(scan_base.points, config_.source_voxel_m);
+  const Eigen::Isometry3d start = r.guess.toIsometry3d();
+  const Eigen::MatrixXd prior_information = priorInformation(r.odom_leg);
+  IcpResult icp_result = registerStages(target, source, start, origin, &r, config_.odometry_prior ? &prior_information : nullptr);
+  if (config_.odometry_prior && icp_result.converged) {
+    const Pose2D offset = r.guess.between(Pose2D::fromIsometry3d(icp_result.T_target_source));
+    const Eigen::Vector3d d(offset.x, offset.y, offset.yaw);
+    // x, y, yaw of the prior's information (6dof: rows and columns 0, 1, 5 of x, y, z, roll, pitch, yaw).
+    const int k[3] = {0, 1, config_.icp.six_dof ? 5 : 2};
+    Eigen::Matrix3d info;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) info(i, j) = prior_information(k[i], k[j]);
+    r.prior_distance = std::sqrt(d.dot(info * d));
+    // Only where the prior had a say (some stage had weak directions); elsewhere a second run is the same.
+    if (r.prior_distance > config_.prior_gate && icp_result.remapped) {
+      r.prior_rejected = true;
+      icp_result = registerStages(target, source, start, origin, &r, nullptr);
+    }
+  }
+  r.weak_gain_m = icp_result.weak_gain_m;
+  r.weak_gain_rad = icp_result.weak_gain_rad;
   r.converged = icp_result.converged;
   r.failure = icp_result.failure;
   r.iterations = icp_result.iterations;
@@ -213,9 +254,10 @@ void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, 
 }
 
 Registration IcpSlam::registerAgainst(const VoxelMap& target, const PointCloud& scan_base, const Pose2D& guess,
-                                      const Eigen::Vector3d& sensor_origin) const {
+                                      const Eigen::Vector3d& sensor_origin, const Pose2D& odom_leg) const {
   Registration r;
   r.guess = guess;
+  r.odom_leg = odom_leg;
   const auto start = std::chrono::steady_clock::now();
   registerInto(target, scan_base, sensor_origin.cast<float>(), r);
   r.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -377,6 +419,7 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     r.odom_scale = config_.odom_scale_estimation ? odomScale() : 1.0;
     delta.x *= r.odom_scale;
     delta.y *= r.odom_scale;
+    r.odom_leg = delta;
     r.guess = last_map_ * delta;
   }
   const Eigen::Vector3f origin = sensor_origin.cast<float>();

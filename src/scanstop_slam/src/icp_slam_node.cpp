@@ -46,6 +46,22 @@ class IcpSlamNode {
     config.icp.method = parseIcpMethod(method, pnh.resolveName("method"));
     optional("degeneracy_ratio", config.icp.degeneracy_ratio);
     optional("degeneracy_remap", config.icp.degeneracy_remap);
+    optional("prior_all_directions", config.icp.prior_all_directions);
+    optional("information_points", config.icp.information_points);
+    optional("information_sigma", config.icp.information_sigma_m);
+    optional("odometry_prior", config.odometry_prior);
+    optional("prior_sigma", config.prior_sigma_m);
+    optional("prior_sigma_per_m", config.prior_sigma_per_m);
+    double prior_sigma_deg = config.prior_sigma_rad * 180.0 / M_PI;
+    optional("prior_sigma_deg", prior_sigma_deg);
+    requireInRange(pnh.resolveName("prior_sigma_deg"), prior_sigma_deg, 1e-4, 180.0, "deg");
+    config.prior_sigma_rad = prior_sigma_deg * M_PI / 180.0;
+    optional("prior_sigma_angle_per_rad", config.prior_sigma_rad_per_rad);
+    optional("prior_gate", config.prior_gate);
+    double prior_sigma_deg_per_m = config.prior_sigma_rad_per_m * 180.0 / M_PI;
+    optional("prior_sigma_deg_per_m", prior_sigma_deg_per_m);
+    requireInRange(pnh.resolveName("prior_sigma_deg_per_m"), prior_sigma_deg_per_m, 0.0, 57.0, "deg/m");
+    config.prior_sigma_rad_per_m = prior_sigma_deg_per_m * M_PI / 180.0;
     optional("c_max", config.icp.c_max_m);
     optional("t_c", config.icp.t_c_m);
     double r_c_deg = config.icp.r_c_rad * 180.0 / M_PI;
@@ -258,11 +274,19 @@ class IcpSlamNode {
     res.scan_index = r.index;
     if (r.converged)
       ROS_INFO("icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s, "
-               "condition %.3g%s%s, odometry scale %.4f", r.index, r.map_pose.toString().c_str(), r.iterations, r.correspondences,
-               r.rms_m * 1000, r.time_s, r.condition, r.degenerate ? " (degenerate" : "",
-               r.degenerate ? (r.remapped ? ", guess kept along the weak direction)" : ")") : "", r.odom_scale);
+               "condition %.3g%s%s, odometry scale %.4f, prior %.1f sigma, weak directions %.1f cm %.2f deg from the remap", r.index, r.map_pose.toString().c_str(),
+               r.iterations, r.correspondences, r.rms_m * 1000, r.time_s, r.condition, r.degenerate ? " (degenerate" : "",
+               r.degenerate ? (r.remapped ? (slam_->config().odometry_prior ? ", held by the odometry prior)"
+                                                                            : ", guess kept along the weak direction)")
+                                          : ")")
+                            : "",
+               r.odom_scale, r.prior_distance, r.weak_gain_m * 100, r.weak_gain_rad * 180 / M_PI);
     else
       ROS_WARN("icp_slam_node: scan %u: %s", r.index, res.message.c_str());
+    if (r.prior_rejected)
+      ROS_WARN("icp_slam_node: scan %u: weighed against the odometry prior the registration ended %.1f sigma from "
+               "it (beyond prior_gate %.1f): registered again keeping the guess along weak directions",
+               r.index, r.prior_distance, slam_->config().prior_gate);
     if (r.refine_rejected)
       ROS_WARN("icp_slam_node: scan %u: the refinement stage moved the pose %.1f cm, %.2f deg (beyond "
                "refine_max_correction %.1f cm, %.2f deg): kept the thesis stage's result",

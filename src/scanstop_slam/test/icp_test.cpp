@@ -982,6 +982,132 @@ TEST(IcpDegeneracy, AtTheMappedEndOfACorridorPointToPlaneKeepsThePriorWherePoint
   }
 }
 
+/// A door jamb's face across the corridor of straightCorridor: the plane x = x_face, y in [0.8, 1]
+/// (beside the north wall), z in [0, 2.5] m; n uniform samples, noise sigma [m].
+std::vector<Eigen::Vector3f> jambFace(std::mt19937& rng, float x_face, int n, float sigma) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> noise(0.0f, sigma);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < n; ++i)
+    pts.push_back(Eigen::Vector3f(x_face + noise(rng), 0.8f + 0.2f * u(rng), 2.5f * u(rng)));
+  return pts;
+}
+
+TEST(IcpDegeneracy, AWeightedOdometryPriorTakesWhatTheFewPairsAlongTheAxisKnow) {
+  // The corridor has one jamb face across it, 3 m ahead: 400 of the scan's 40,000 points
+  // hold x, so the registration is degenerate along x (eigenvalue well below 1 % of the largest)
+  // but not blind. The guess is 5 cm along, 2 cm across and 0.5 deg off; the odometry prior says
+  // 4 cm (a 2 m leg). Solution remapping keeps the guess's 5 cm; the weighted prior weighs the
+  // jamb's pairs against it and lands within 2 cm, and exact across. Without the jamb (nothing
+  // along x) the weighted prior keeps the guess's x like the remap.
+  std::mt19937 rng(37);
+  std::vector<Eigen::Vector3f> world = straightCorridor(rng, -15.0f, 15.0f, 300000, 0.001f);
+  const std::vector<Eigen::Vector3f> jamb = jambFace(rng, 3.0f, 3000, 0.001f);
+  world.insert(world.end(), jamb.begin(), jamb.end());
+  VoxelMap with_jamb(0.3, 100), plain(0.3, 100);
+  with_jamb.add(world);
+  plain.add(straightCorridor(rng, -15.0f, 15.0f, 300000, 0.001f));
+  std::vector<Eigen::Vector3f> scan = straightCorridor(rng, -4.0f, 4.0f, 40000, 0.001f);
+  const std::vector<Eigen::Vector3f> scan_plain = scan;
+  const std::vector<Eigen::Vector3f> scan_jamb = jambFace(rng, 3.0f, 400, 0.001f);
+  scan.insert(scan.end(), scan_jamb.begin(), scan_jamb.end());
+  const Eigen::Isometry3d guess = pose(0.05, 0.02, 0, 0, 0, 0.5 * M_PI / 180);
+  const double s_m = std::hypot(0.01, 0.02 * 2.0), s_rad = 1.0 * M_PI / 180;
+  for (const bool six_dof : {false, true}) {
+    Eigen::MatrixXd prior_information = six_dof ? Eigen::MatrixXd::Identity(6, 6) / (s_rad * s_rad)
+                                                : Eigen::MatrixXd::Identity(3, 3) / (s_rad * s_rad);
+    for (int k = 0; k < (six_dof ? 3 : 2); ++k) prior_information(k, k) = 1.0 / (s_m * s_m);
+    // Tolerances of 0.01 mm: pairs at the jamb's edges come and go, and each moves x by ~0.02 mm
+    // now that the jamb has a say (the remap's steps ignore x, so they settle at any tolerance).
+    IcpConfig c = corridorConfig(IcpMethod::point_to_plane, six_dof, true);
+    c.t_c_m = 1e-5;
+    c.r_c_rad = 1e-5;
+    const std::string what = six_dof ? "6dof" : "3dof";
+    const IcpResult remapped = icp(with_jamb, scan, guess, c);
+    const IcpResult weighted = icp(with_jamb, scan, guess, c, nullptr, nullptr, &prior_information);
+    const IcpResult blind = icp(plain, scan_plain, guess, c, nullptr, nullptr, &prior_information);
+    std::cout << what << ": remapped x " << remapped.T_target_source.translation().x() * 1000 << " mm (condition "
+              << remapped.condition << "), weighted x " << weighted.T_target_source.translation().x() * 1000
+              << " mm (from the remap " << weighted.weak_gain_m * 1000 << " mm), no jamb x "
+              << blind.T_target_source.translation().x() * 1000 << " mm" << std::endl;
+    ASSERT_TRUE(remapped.converged && weighted.converged && blind.converged)
+        << remapped.failure << weighted.failure << blind.failure;
+    EXPECT_TRUE(remapped.degenerate) << what;
+    EXPECT_TRUE(weighted.degenerate) << what;
+    EXPECT_NEAR(remapped.T_target_source.translation().x(), 0.05, 0.002) << what;
+    EXPECT_LT(std::abs(weighted.T_target_source.translation().x()), 0.02) << what;  // 6dof: the floor's pairs count too
+    EXPECT_GT(weighted.weak_gain_m, 0.03) << what;  // what the jamb added
+    EXPECT_NEAR(blind.T_target_source.translation().x(), 0.05, 0.001) << what;
+    for (const IcpResult* r : {&weighted, &blind}) {
+      EXPECT_NEAR(r->T_target_source.translation().y(), 0.0, 0.001) << what;
+      EXPECT_NEAR(yawOf(r->T_target_source) * 180 / M_PI, 0.0, 0.01) << what;
+    }
+  }
+  const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(6, 6);
+  EXPECT_THROW(icp(plain, scan_plain, guess, corridorConfig(IcpMethod::point_to_plane, false, true), nullptr, nullptr, &wrong),
+               std::invalid_argument);
+}
+
+TEST(IcpSlam, ARegistrationFarBeyondThePriorsGateIsRegisteredAgainWithoutItsWeight) {
+  // Two scans in a corridor (degenerate along x, so the prior has a say), the second's odometry
+  // 5 cm long, 2 cm to the side and 0.6 deg off over a 1 m leg: the result lies about one sigma
+  // of the prior's error model from the guess, within the default gate. With a gate of 0.5 sigma
+  // the weighed result is refused and the registration runs again the old way (odometry_prior
+  // off: the same pose to the last bit).
+  std::mt19937 rng(43);
+  const std::vector<Eigen::Vector3f> corridor = straightCorridor(rng, -15.0f, 15.0f, 200000, 0.001f);
+  const auto second = [&](const SlamConfig& config) {
+    IcpSlam slam(config);
+    const auto scanAt = [&](const Pose2D& p) {
+      PointCloud scan;
+      scan.points = transformed(corridor, p.toIsometry3d().inverse());
+      scan.setUnorganized();
+      return scan;
+    };
+    slam.registerScan(scanAt(Pose2D()), Pose2D(), Eigen::Vector3d(0, 0, 0.45));
+    return slam.registerScan(scanAt(Pose2D(1.0, 0.0, 0.0)), Pose2D(1.05, 0.02, 0.01), Eigen::Vector3d(0, 0, 0.45));
+  };
+  SlamConfig weighed, gated, old;
+  weighed.odometry_prior = true;
+  gated.odometry_prior = true;
+  gated.prior_gate = 0.5;
+  old.odometry_prior = false;
+  const Registration w = second(weighed), g = second(gated), o = second(old);
+  ASSERT_TRUE(w.converged && g.converged && o.converged) << w.failure << g.failure << o.failure;
+  std::cout << "prior distance " << w.prior_distance << " sigma" << std::endl;
+  EXPECT_TRUE(w.degenerate);
+  EXPECT_GT(w.prior_distance, 0.5);
+  EXPECT_LT(w.prior_distance, 3.0);
+  EXPECT_FALSE(w.prior_rejected);
+  EXPECT_NEAR(w.map_pose.x, 1.05, 0.002);  // nothing along the corridor but the prior
+  EXPECT_NEAR(w.map_pose.y, 0.0, 0.002);
+  EXPECT_TRUE(g.prior_rejected);
+  EXPECT_EQ(o.prior_distance, 0.0);
+  EXPECT_FALSE(o.prior_rejected);
+  EXPECT_EQ(g.map_pose.x, o.map_pose.x);
+  EXPECT_EQ(g.map_pose.y, o.map_pose.y);
+  EXPECT_EQ(g.map_pose.yaw, o.map_pose.yaw);
+}
+
+TEST(IcpSlam, ThePriorsErrorModelGrowsWithTheLeg) {
+  SlamConfig config;
+  const IcpSlam slam(config);
+  const Eigen::MatrixXd still = slam.priorInformation(Pose2D());
+  const Eigen::MatrixXd leg = slam.priorInformation(Pose2D(1.2, -1.6, M_PI / 2));
+  ASSERT_EQ(still.rows(), 3);
+  EXPECT_NEAR(still(0, 0), 1.0 / (0.01 * 0.01), 1e-6);
+  const double s_m2 = 0.01 * 0.01 + std::pow(0.02 * 2.0, 2);
+  EXPECT_NEAR(leg(0, 0), 1.0 / s_m2, 1e-6);
+  EXPECT_NEAR(leg(1, 1), 1.0 / s_m2, 1e-6);
+  const double s_rad2 = std::pow(M_PI / 180, 2) + std::pow(0.03 * M_PI / 2, 2) + std::pow(0.01 * 2.0, 2);
+  EXPECT_NEAR(leg(2, 2), 1.0 / s_rad2, 1e-6);
+  EXPECT_EQ(leg(0, 1), 0.0);
+  config.icp.six_dof = true;
+  EXPECT_EQ(IcpSlam(config).priorInformation(Pose2D(1, 0, 0)).rows(), 6);
+  config.prior_sigma_m = 0.0;
+  EXPECT_THROW(config.validate(), std::exception);
+}
+
 TEST(IcpPointToPlane, ConvergesInAWellConstrainedRoomAndRemappingChangesNothingThere) {
   // The synthetic room (floor, three walls, a box), map and scan sampled independently, no noise:
   // point-to-plane to 1 mm / 0.01 deg in 3dof and 6dof, not degenerate; point-to-point's result

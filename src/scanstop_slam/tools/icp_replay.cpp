@@ -29,6 +29,9 @@ constexpr const char* kUsage =
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
     "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--odom-scale-min-travel M]\n"
     "                  [--coarse-point-to-plane] [--isolated odometry|truth [--from N]]\n"
+    "                  [--no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] [--prior-sigma-deg D]\n"
+    "                  [--prior-sigma-angle-per-rad F] [--prior-sigma-deg-per-m D] [--information-points N]\n"
+    "                  [--information-sigma M] [--prior-gate SIGMAS] [--prior-all-directions]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
@@ -82,14 +85,16 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
     if (prev && i >= from) {
       const MapScanInfo& before = in.scans()[*prev];
       const Pose2D guess = from_truth ? *t : *truth[before.index] * before.odom_pose.between(info.odom_pose);
-      const slam::Registration r = slam.registerAgainst(map, scan, guess, info.sensor_origin);
+      const slam::Registration r =
+          slam.registerAgainst(map, scan, guess, info.sensor_origin, before.odom_pose.between(info.odom_pose));
       total_s += r.time_s;
       const double e = posErr(r.map_pose, *t), y = yawErrDeg(r.map_pose, *t);
       if (!quiet)
         std::printf("scan %3zu: %s err %5.1f cm (dx %5.1f dy %5.1f) %5.2f deg, guess off %5.1f cm, it %3d, overlap %.2f, "
-                    "condition %.2f%s%s\n",
+                    "condition %.2f, prior %.1f sigma%s%s%s\n",
                     i, r.converged ? "ok    " : "FAILED", e * 100, (r.map_pose.x - t->x) * 100, (r.map_pose.y - t->y) * 100, y,
-                    posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.degenerate ? " degenerate" : "",
+                    posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.prior_distance,
+                    r.prior_rejected ? " (beyond prior_gate: registered without its weight)" : "", r.degenerate ? " degenerate" : "",
                     weakText(r, *t).c_str());
       failed += r.converged ? 0 : 1;
       sum2 += e * e;
@@ -138,6 +143,16 @@ int main(int argc, char** argv) {
       .flag("--no-source-centroids", config.source_centroids, false)
       .real("--degeneracy-ratio", config.icp.degeneracy_ratio, 0.0, 1.0)
       .flag("--no-remap", config.icp.degeneracy_remap, false)
+      .flag("--no-odometry-prior", config.odometry_prior, false)
+      .real("--prior-sigma", config.prior_sigma_m, 1e-6, 10.0)
+      .real("--prior-sigma-per-m", config.prior_sigma_per_m, 0.0, 1.0)
+      .real("--prior-sigma-deg", config.prior_sigma_rad, 1e-4, 180.0, deg)
+      .real("--prior-sigma-angle-per-rad", config.prior_sigma_rad_per_rad, 0.0, 1.0)
+      .real("--prior-sigma-deg-per-m", config.prior_sigma_rad_per_m, 0.0, 57.0, deg)
+      .real("--prior-gate", config.prior_gate, 1e-6, 1e6)
+      .flag("--prior-all-directions", config.icp.prior_all_directions)
+      .real("--information-points", config.icp.information_points, 1e-6, 1e6)
+      .real("--information-sigma", config.icp.information_sigma_m, 1e-6, 1.0)
       .flag("--no-odom-scale", config.odom_scale_estimation, false)
       .flag("--coarse-point-to-plane", config.coarse_point_to_point, false)
       .real("--odom-scale-min-travel", config.odom_scale_min_travel_m, 0.01, 100.0)

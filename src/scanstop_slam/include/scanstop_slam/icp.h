@@ -180,6 +180,20 @@ struct IcpConfig {
   /// the final information matrix, and the final figures are evaluated there. No weak direction:
   /// results unchanged, bit for bit.
   bool degeneracy_remap = true;
+  /// The registration's own information along weak directions when they are weighed against an
+  /// odometry prior (icp()'s prior_information; then degeneracy_remap does not apply): the
+  /// point-to-plane pairs' mean
+  /// J^T J (IcpResult::information / information_pairs) times information_points independent
+  /// pairs over information_sigma_m^2. Neighbouring pairs' errors are not independent (one wall,
+  /// one scan line, the map's own offsets), so the count is far below the pairs'. 50 / 1 cm: a
+  /// direction whose eigenvalue is 1 % of the largest (the degeneracy_ratio) is held to about
+  /// 2 cm, like the odometry of a 1-2 m leg, so the two weigh about alike there.
+  /// With a prior's information: weigh it in every direction (each Gauss-Newton step minimizes the
+  /// weighted pairs plus the prior; point-to-point's result gets one such step), not only along
+  /// the weak ones.
+  bool prior_all_directions = false;
+  double information_points = 50.0;   ///< [1], (0, 1e6]
+  double information_sigma_m = 0.01;  ///< [m], (0, 1]
   // Failure detection.
   int min_correspondences = 200;
   double min_overlap = 0.05;          ///< correspondences / source points
@@ -221,6 +235,11 @@ struct IcpResult {
   /// degeneracy_remap changed the result (point_to_point: the correction was projected;
   /// point_to_plane: some step had a weak direction).
   bool remapped = false;
+  /// With a weighed prior (icp()'s prior_information) on a degenerate registration: how far the
+  /// result lies from where solution remapping would have kept it (what the weak directions' own
+  /// pairs added against the prior), at the robot [m] and in angle [rad]. 0 otherwise.
+  double weak_gain_m = 0.0;
+  double weak_gain_rad = 0.0;
 };
 
 /// Registers source points (in their own frame) to the map, starting at T_init (source -> map).
@@ -229,9 +248,16 @@ struct IcpResult {
 /// A stage that starts from an earlier stage's result passes the first stage's guess (the odometry
 /// prior), so that no stage slides along a direction the final pairs cannot fix: both methods then
 /// project the whole correction prior^-1 T back onto the well-constrained directions at the end.
+/// prior_information (3x3 for 3dof, 6x6 for 6dof; the inverse covariance of the prior in the pose
+/// parameters of IcpConfig at the prior [1/m^2, 1/rad^2]), when given, replaces that hard remap
+/// by weighing along the weak directions (whatever degeneracy_remap says): there the step
+/// minimizes the pairs' residuals (weighted as IcpConfig::information_points /
+/// information_sigma_m say) plus the prior's Mahalanobis distance, so a corridor's axis takes what
+/// its door jambs' few pairs and the odometry of the leg know of it in proportion. The
+/// well-constrained directions are the pairs' alone, as without a prior.
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
               const IcpConfig& config, const Eigen::Vector3f* source_origin = nullptr,
-              const Eigen::Isometry3d* prior = nullptr);
+              const Eigen::Isometry3d* prior = nullptr, const Eigen::MatrixXd* prior_information = nullptr);
 
 /// Keeps one point per voxel (the first); voxel_m <= 0 returns the finite points unchanged.
 std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m);
