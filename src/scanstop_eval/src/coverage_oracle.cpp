@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
+#include <string>
 #include <stdexcept>
 #include <utility>
 
 #include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
 #include "scanstop_eval/surface_elements.h"
 #include "scanstop_explorer/ground_truth.h"
 
@@ -19,7 +22,29 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-/// Lattice points (spacing grid_m, through the start) where the disc's centre can stand.
+/// The centre cell nearest to (x, y) within the square of half-width half_m about it, if any.
+std::optional<Eigen::Vector2d> nearestCentre(const explorer::ReachableFloor& floor, double x, double y, double half_m) {
+  const explorer::GridGeometry& g = floor.geometry;
+  const cv::Point c = g.cellOf(x, y);
+  if (g.contains(c) && floor.centres.at<uint8_t>(c)) return Eigen::Vector2d(x, y);
+  const int r = static_cast<int>(std::ceil(half_m / g.resolution));
+  std::optional<Eigen::Vector2d> best;
+  double best_d2 = 0.0;
+  for (int row = std::max(0, c.y - r); row <= std::min(g.height - 1, c.y + r); ++row)
+    for (int col = std::max(0, c.x - r); col <= std::min(g.width - 1, c.x + r); ++col) {
+      if (!floor.centres.at<uint8_t>(row, col)) continue;
+      const Eigen::Vector2d p = g.center({col, row});
+      const Eigen::Vector2d d = p - Eigen::Vector2d(x, y);
+      if (d.cwiseAbs().maxCoeff() >= half_m || (best && d.squaredNorm() >= best_d2)) continue;
+      best = p;
+      best_d2 = d.squaredNorm();
+    }
+  return best;
+}
+
+/// One candidate per square of a lattice through the start (spacing grid_m) that holds a place for
+/// the disc's centre: the lattice point itself, or the centre cell nearest to it in its square (so
+/// that a passage whose centres are narrower than the lattice gets candidates too).
 std::vector<Eigen::Vector2d> latticeOnCentres(const explorer::ReachableFloor& floor, const Pose2D& start, double grid_m) {
   const explorer::GridGeometry& g = floor.geometry;
   const double x0 = g.origin_x, y0 = g.origin_y, x1 = x0 + g.width * g.resolution, y1 = y0 + g.height * g.resolution;
@@ -27,21 +52,25 @@ std::vector<Eigen::Vector2d> latticeOnCentres(const explorer::ReachableFloor& fl
   const long j0 = -static_cast<long>(std::floor((start.y - y0) / grid_m)), j1 = static_cast<long>((y1 - start.y) / grid_m);
   std::vector<Eigen::Vector2d> out;
   for (long j = j0; j <= j1; ++j)
-    for (long i = i0; i <= i1; ++i) {
-      const double x = start.x + i * grid_m, y = start.y + j * grid_m;
-      const cv::Point c = g.cellOf(x, y);
-      if (g.contains(c) && floor.centres.at<uint8_t>(c)) out.emplace_back(x, y);
-    }
+    for (long i = i0; i <= i1; ++i)
+      if (const auto p = nearestCentre(floor, start.x + i * grid_m, start.y + j * grid_m, grid_m / 2)) out.push_back(*p);
   return out;
 }
 
-/// The reachable floor cells, numbered, and which of them a point marks as seen.
+/// The reachable floor cells, numbered, and which of them a point marks as seen. A cell of k x k
+/// raster cells of the true reachable floor is a reachable floor cell when one of them is reachable.
 class FloorCells {
  public:
-  explicit FloorCells(const explorer::ReachableFloor& floor) : g_(floor.geometry), id_(g_.width * g_.height, -1) {
-    for (int r = 0; r < g_.height; ++r)
-      for (int c = 0; c < g_.width; ++c)
-        if (floor.reachable.at<uint8_t>(r, c)) id_[r * g_.width + c] = static_cast<int32_t>(count_++);
+  FloorCells(const explorer::ReachableFloor& floor, int k) : g_(floor.geometry) {
+    g_.resolution *= k;
+    g_.width = (g_.width + k - 1) / k;
+    g_.height = (g_.height + k - 1) / k;
+    id_.assign(static_cast<size_t>(g_.width) * g_.height, -1);
+    for (int r = 0; r < floor.reachable.rows; ++r)
+      for (int c = 0; c < floor.reachable.cols; ++c) {
+        int32_t& id = id_[(r / k) * g_.width + c / k];
+        if (floor.reachable.at<uint8_t>(r, c) && id < 0) id = static_cast<int32_t>(count_++);
+      }
   }
   size_t size() const { return count_; }
 
@@ -165,7 +194,11 @@ void OracleConfig::validate() const {
   requireInRange("grid_m", grid_m, 0.05, 10.0, "m");
   requireInRange("planes", planes, 1, 2000);
   requireInRange("robot_radius_m", robot_radius_m, 1e-3, 5.0, "m");
-  requireInRange("cell_m", cell_m, 0.02, 1.0, "m");
+  requireInRange("raster_m", raster_m, 0.01, 1.0, "m");
+  requireInRange("cell_m", cell_m, raster_m, 1.0, "m");
+  if (std::abs(cellsPerFloorCell() * raster_m - cell_m) > 1e-6 * cell_m)
+    throw ConfigError("cell_m = " + std::to_string(cell_m) + " m is not a whole multiple of raster_m = " +
+                      std::to_string(raster_m) + " m");
   requireInRange("floor_tolerance_m", floor_tolerance_m, 0.0, 1.0, "m");
   requireInRange("known_free_m", known_free_m, 0.0, 5.0, "m");
   requireInRange("surface_cell_m", surface_cell_m, 0.01, 1.0, "m");
@@ -175,6 +208,8 @@ void OracleConfig::validate() const {
   for (const double s : shares) requireInRange("shares", s, 0.0, 1.0);
   requireNonNegative("max_pair_work", max_pair_work);
 }
+
+int OracleConfig::cellsPerFloorCell() const { return std::max(1, static_cast<int>(std::lround(cell_m / raster_m))); }
 
 double CoverResult::shareAfter(size_t k) const {
   if (k == 0 || greedy.covered.empty() || total == 0) return 0.0;
@@ -187,8 +222,8 @@ OracleResult runCoverageOracle(sim::Simulator& sim, const Pose2D& start, const O
   Clock::time_point t0 = Clock::now();
   const TriangleMesh& mesh = sim.world().mesh();
   const explorer::ReachableFloor truth =
-      explorer::reachableFloor(mesh, start, config.robot_radius_m, config.cell_m, config.z_lo_m, config.z_hi_m);
-  const FloorCells floor(truth);
+      explorer::reachableFloor(mesh, start, config.robot_radius_m, config.raster_m, config.z_lo_m, config.z_hi_m);
+  const FloorCells floor(truth, config.cellsPerFloorCell());
   const SurfaceElements surface(mesh, config.surface_cell_m, config.z_lo_m);
   OracleResult out;
   out.start = start;

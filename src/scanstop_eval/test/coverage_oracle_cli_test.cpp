@@ -71,6 +71,9 @@ TEST(CoverageOracleCli, BadArgumentsAreNamedWithTheAllowedValues) {
   r = run(kOracle + " " + world + " --surface-cell 0.02 --surface-tolerance 0.03");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.out.find("--surface-tolerance 0.03 is larger than the surface cell 0.02"), std::string::npos) << r.out;
+  r = run(kOracle + " " + world + " --cell 0.12");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--cell 0.12 is not a whole multiple of --raster 0.05"), std::string::npos) << r.out;
   r = run(kOracle + " " + world + " --frobnicate");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.out.find("coverage_oracle: unknown option --frobnicate"), std::string::npos) << r.out;

@@ -4,6 +4,7 @@
 // exactly): how many scans see 90 / 95 / 99 % of the reachable floor and of the visible surface.
 #include <cstdio>
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -28,7 +29,8 @@ constexpr const char* kUsage =
     "  --profile      the scans' error profile, perfect or thesis (default perfect)\n"
     "  --radius       robot disc of the reachable floor and of the candidates [m], [0.001, 5] (default 0.3:\n"
     "                 robot_body/radius 0.26 + the explorer's inflation_margin_m 0.04)\n"
-    "  --cell         floor cell [m], [0.02, 1] (default 0.1)\n"
+    "  --cell         floor cell [m], [0.01, 1], a whole multiple of --raster (default 0.1)\n"
+    "  --raster       raster of the true reachable floor, as floor_coverage's [m], [0.01, 1] (default 0.05)\n"
     "  --floor-tolerance  a floor cell is seen when a floor hit lies this close to it (its square) [m], [0, 1]\n"
     "                 (default 0.1)\n"
     "  --known-free   floor cells this close to a scan's pose count as seen (the explorer's known_free_radius_m:\n"
@@ -75,7 +77,7 @@ void printJson(const std::string& world, const OracleResult& r, const scanstop::
   std::cout << "{\"world\": " << scanstop::jsonString(world) << ", \"start\": [" << jsonNumber(r.start.x) << ", "
             << jsonNumber(r.start.y) << ", " << jsonNumber(r.start.yaw) << "], \"grid_m\": " << jsonNumber(c.grid_m)
             << ", \"planes\": " << c.planes << ", \"radius_m\": " << jsonNumber(c.robot_radius_m)
-            << ", \"cell_m\": " << jsonNumber(c.cell_m) << ", \"known_free_m\": " << jsonNumber(c.known_free_m)
+            << ", \"cell_m\": " << jsonNumber(c.cell_m) << ", \"raster_m\": " << jsonNumber(c.raster_m) << ", \"known_free_m\": " << jsonNumber(c.known_free_m)
             << ", \"candidates\": " << r.candidates.size() << ", \"candidates_refused\": " << r.candidates_refused
             << ", \"reachable_m2\": " << jsonNumber(r.reachable_m2, 6) << ", \"floor_cells\": " << r.floor_cells
             << ", \"floor_seen_share\": " << jsonNumber(floor_share, 6) << ", \"surface_elements\": " << r.surface_elements
@@ -89,8 +91,8 @@ void printText(const std::string& world, const OracleResult& r, const scanstop::
   std::printf("coverage_oracle: %s from (%g, %g, %g): %zu candidates every %g m (%zu refused by the simulator), %d planes\n",
               world.c_str(), r.start.x, r.start.y, r.start.yaw, r.candidates.size(), c.grid_m, r.candidates_refused,
               c.planes);
-  std::printf("reachable floor: %.1f m2 (%zu cells of %g m), seen by some candidate: %.1f %%\n", r.reachable_m2,
-              r.floor_cells, c.cell_m, r.floor_cells ? 100.0 * r.floor_seen / r.floor_cells : 0.0);
+  std::printf("reachable floor: %.1f m2 (raster %g m) in %zu cells of %g m, seen by some candidate: %.1f %%\n",
+              r.reachable_m2, c.raster_m, r.floor_cells, c.cell_m, r.floor_cells ? 100.0 * r.floor_seen / r.floor_cells : 0.0);
   std::printf("surface: %zu elements of %g m, visible from the reachable floor: %zu (surface completeness %.1f %%)\n",
               r.surface_elements, c.surface_cell_m, r.surface_visible,
               r.surface_elements ? 100.0 * r.surface_visible / r.surface_elements : 0.0);
@@ -108,6 +110,16 @@ void printText(const std::string& world, const OracleResult& r, const scanstop::
   for (const size_t i : r.floor.greedy.order) std::printf(" (%.2f, %.2f)", r.candidates[i].x(), r.candidates[i].y());
   std::printf("\ntime: %.1f s (setup %.1f s, scans %.1f s, cover %.1f s)\n", r.setup_s + r.scan_s + r.cover_s, r.setup_s,
               r.scan_s, r.cover_s);
+}
+
+/// What is wrong with options that depend on each other ("" when nothing).
+std::string optionProblem(const scanstop::eval::OracleConfig& c) {
+  std::ostringstream o;
+  if (c.surface_tolerance_m > c.surface_cell_m)
+    o << "--surface-tolerance " << c.surface_tolerance_m << " is larger than the surface cell " << c.surface_cell_m;
+  else if (c.cell_m < c.raster_m || std::abs(c.cellsPerFloorCell() * c.raster_m - c.cell_m) > 1e-6 * c.cell_m)
+    o << "--cell " << c.cell_m << " is not a whole multiple of --raster " << c.raster_m;
+  return o.str();
 }
 
 }  // namespace
@@ -130,7 +142,8 @@ int main(int argc, char** argv) {
       .choice("--planes", planes_text, {"50", "100", "200", "400"})
       .choice("--profile", profile, {"perfect", "thesis"})
       .real("--radius", config.robot_radius_m, 1e-3, 5.0)
-      .real("--cell", config.cell_m, 0.02, 1.0)
+      .real("--cell", config.cell_m, 0.01, 1.0)
+      .real("--raster", config.raster_m, 0.01, 1.0)
       .real("--floor-tolerance", config.floor_tolerance_m, 0.0, 1.0)
       .real("--known-free", config.known_free_m, 0.0, 5.0)
       .real("--surface-cell", config.surface_cell_m, 0.01, 1.0)
@@ -139,9 +152,8 @@ int main(int argc, char** argv) {
       .flag("--quiet", quiet);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   config.planes = std::stoi(planes_text);
-  if (config.surface_tolerance_m > config.surface_cell_m) {
-    std::cerr << "coverage_oracle: --surface-tolerance " << config.surface_tolerance_m
-              << " is larger than the surface cell " << config.surface_cell_m << "\n" << kUsage;
+  if (const std::string problem = optionProblem(config); !problem.empty()) {
+    std::cerr << "coverage_oracle: " << problem << "\n" << kUsage;
     return kExitUsage;
   }
   try {

@@ -27,7 +27,8 @@ struct OracleConfig {
   double grid_m = 0.5;               ///< candidate spacing, a lattice through the start [m], [0.05, 10]
   int planes = 400;                  ///< planes of each candidate's scan, [1, 2000]
   double robot_radius_m = 0.30;      ///< disc of the reachable floor and of the candidates' centres [m], (0, 5]
-  double cell_m = 0.1;               ///< floor cell [m], [0.02, 1]
+  double raster_m = 0.05;            ///< raster of the true reachable floor (floor_coverage's) [m], [0.01, 1]
+  double cell_m = 0.1;               ///< floor cell, a whole multiple of raster_m [m], [raster_m, 1]
   double floor_tolerance_m = 0.1;    ///< a floor cell is seen when a floor hit (z < z_lo_m) lies this close to
                                      ///< the cell (its square) [m], [0, 1]
   double known_free_m = 0.8;         ///< floor cells whose centre lies this close to a scan's pose count as seen:
@@ -41,6 +42,8 @@ struct OracleConfig {
   double max_pair_work = 5e8;        ///< bound of the exact pair check (word operations); 0: greedy only
   /// Throws ConfigError naming the field, its value and the range.
   void validate() const;
+  /// Raster cells along a floor cell's side.
+  int cellsPerFloorCell() const;
 };
 
 /// One greedy cover with its targets.
@@ -58,8 +61,8 @@ struct OracleResult {
   Pose2D start;                              ///< world frame
   std::vector<Eigen::Vector2d> candidates;   ///< scanned positions (world frame) [m]
   size_t candidates_refused = 0;             ///< lattice points the simulator refused (its disc touched an obstacle)
-  size_t floor_cells = 0;                    ///< reachable floor cells (cell_m)
-  double reachable_m2 = 0.0;                 ///< their area [m^2]
+  size_t floor_cells = 0;                    ///< floor cells (cell_m) holding reachable floor
+  double reachable_m2 = 0.0;                 ///< the true reachable floor (raster_m) [m^2]
   size_t floor_seen = 0;                     ///< of them, seen by some candidate
   size_t surface_elements = 0;               ///< elements of the world's surface (not floor)
   size_t surface_visible = 0;                ///< of them, seen by some candidate: the visible surface
