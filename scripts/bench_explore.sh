@@ -8,11 +8,15 @@
 # modelled scan time (target: under 2 s of compute per cycle against 40 s per scan). The default list
 # also runs room_10x8 with min_scan_travel 2.0, the issue's acceptance run (<= 21 scans, >= 95 % of
 # the reachable floor, no collisions, final SLAM error <= 3 cm), and says whether it passes.
+# Next to every run's scans it prints the known-map reference of its world (coverage_oracle,
+# scanstop_eval: the fewest perfect scans that see 99 % of the reachable floor, from the same start)
+# and the ratio scans / reference; the reference is computed once per world and start and kept in
+# the bench directory (oracle/<world>.json; office_large with a 1 m candidate grid).
 #
 #   bash scripts/bench_explore.sh [world[+arg:=value...] ...]      (build first: bash scripts/build.sh)
 #   e.g. bash scripts/bench_explore.sh room_10x8+min_scan_travel:=2.0+seed:=2
 # Environment: SCANSTOP_BENCH_DIR (default runs/bench-<date>-<time>), SCANSTOP_BENCH_ARGS (extra
-# roslaunch arguments, e.g. "planes:=100 mesh:=false").
+# roslaunch arguments, e.g. "planes:=100 mesh:=false"), SCANSTOP_BENCH_ORACLE (0: no reference).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -31,6 +35,25 @@ out="${SCANSTOP_BENCH_DIR:-$root/runs/bench-$(date +%Y%m%d-%H%M%S)}"
 mkdir -p "$out"
 export ROS_IP=127.0.0.1
 unset ROS_HOSTNAME  # it would take precedence over ROS_IP: keep every node on loopback
+mkdir -p "$out/oracle"
+# The known-map reference of a world from a start ("" = the documented one), computed once: prints its
+# file (oracle/<world>[@<start>].json), or nothing when the oracle failed (named on stderr).
+reference() {
+  local world="$1" file="$2" start="$3" key="$1" args=()
+  if [[ -n "$start" ]]; then key="$world@${start//,/_}"; args+=(--start "$start"); fi
+  if [[ "$world" == office_large ]]; then args+=(--grid 1.0); fi  # 50 x 40 m: about 2,000 candidates at 1 m
+  local json="$out/oracle/$key.json"
+  if [[ ! -s "$json" ]]; then
+    if ! nice "$root/devel/lib/scanstop_eval/coverage_oracle" "$file" --json --quiet ${args[@]+"${args[@]}"} \
+        > "$json.tmp" 2> "$out/oracle/$key.log"; then
+      echo "bench_explore: coverage_oracle $world failed: $(tail -1 "$out/oracle/$key.log")" >&2
+      rm -f "$json.tmp"
+      return 0
+    fi
+    mv "$json.tmp" "$json"
+  fi
+  echo "$json"
+}
 for entry in "${worlds[@]}"; do
   w="${entry%%+*}"
   extra=()
@@ -44,12 +67,27 @@ for entry in "${worlds[@]}"; do
   ROS_MASTER_URI="http://127.0.0.1:$port" ROS_LOG_DIR="$out/$name/ros_log" roslaunch -p "$port" \
     "$root/launch/sim_explore.launch" world:="$w" world_file:="$file" run_dir:="$out/$name" planes:=400 \
     ${extra[@]+"${extra[@]}"} ${SCANSTOP_BENCH_ARGS:-} > "$out/$name.log" 2>&1 || echo "bench_explore: $entry: roslaunch exit $?" >&2
+  if [[ "${SCANSTOP_BENCH_ORACLE:-1}" != 0 ]]; then
+    start=""
+    for a in ${extra[@]+"${extra[@]}"}; do [[ "$a" == start_pose:=* ]] && start="${a#start_pose:=}"; done
+    ref_json="$(reference "$w" "$file" "$start")"
+    [[ -n "$ref_json" ]] && echo "$ref_json" > "$out/$name.oracle"
+    /usr/bin/python3 - "$out/$name/summary.json" "$ref_json" "$entry" <<'PY' || true
+import json, os, sys
+summary, ref, entry = sys.argv[1:4]
+scans = json.load(open(summary))["scans"] if os.path.exists(summary) else None
+r = json.load(open(ref))["floor"]["scans"]["99"] if ref else None
+print("bench_explore: %s: %s scans, reference %s (coverage_oracle: scans for 99 %% of the reachable floor), ratio %s" % (
+    entry, "-" if scans is None else scans, "-" if r is None else r,
+    "%.1f" % (scans / r) if scans is not None and r else "-"))
+PY
+  fi
 done
 /usr/bin/python3 - "$out" "${worlds[@]}" <<'PY'
 import json, os, sys
 out, entries = sys.argv[1], sys.argv[2:]
-print("\n| run | state | scans | coverage (true) | collisions | min clearance (legs < 5 cm) | ATE RMS / max (scan) | final SLAM error | odometry ATE RMS / final | compute/cycle mean (max) | scan time | mission wall time |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("\n| run | state | scans | reference (99 % floor) | scans / reference | coverage (true) | collisions | min clearance (legs < 5 cm) | ATE RMS / max (scan) | final SLAM error | odometry ATE RMS / final | compute/cycle mean (max) | scan time | mission wall time |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 verdicts = []
 for e in entries:
     name = e.replace(":=", "=")
@@ -57,13 +95,18 @@ for e in entries:
     if not os.path.exists(p):
         print("| %s | no summary (see %s/%s.log) |" % (e, out, name)); continue
     s = json.load(open(p))
+    ref = None
+    link = os.path.join(out, name + ".oracle")
+    if os.path.exists(link):
+        ref = json.load(open(open(link).read().strip()))["floor"]["scans"]["99"]
+    ratio = "%.1f" % (s["scans"] / ref) if ref else "-"
     err = lambda k: ("%.1f cm" % (100 * s[k])) if s.get(k) is not None else "-"
     true_cov = s.get("true_coverage")
     ate = "-" if s.get("ate_rms_m") is None else "%s / %s (%d)" % (err("ate_rms_m"), err("ate_max_m"), s["ate_max_scan"])
     clear = "-" if s.get("min_clearance_m") is None else "%s (%d of %d)" % (
         err("min_clearance_m"), s["legs_closer_than_5cm"], s["legs_measured"])
-    print("| %s | %s | %d | %.1f %% (%s) | %d | %s | %s | %s | %s / %s | %.2f s (%.2f s) | %.0f s | %.0f s |" % (
-        e, s["state"], s["scans"], 100 * s["coverage"], "-" if true_cov is None else "%.1f %%" % (100 * true_cov),
+    print("| %s | %s | %d | %s | %s | %.1f %% (%s) | %d | %s | %s | %s | %s / %s | %.2f s (%.2f s) | %.0f s | %.0f s |" % (
+        e, s["state"], s["scans"], "-" if ref is None else ref, ratio, 100 * s["coverage"], "-" if true_cov is None else "%.1f %%" % (100 * true_cov),
         s["collisions"], clear, ate, err("final_slam_error_m"), err("odometry_ate_rms_m"), err("final_odometry_error_m"),
         s["compute_per_cycle_mean_s"], s["compute_per_cycle_max_s"], s["scan_time_mean_s"], s["elapsed_s"]))
     if e == "room_10x8+min_scan_travel:=2.0":

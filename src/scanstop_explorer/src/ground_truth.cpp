@@ -15,15 +15,12 @@
 namespace scanstop {
 namespace explorer {
 
-GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D& start_world, const cv::Mat& states,
-                                        const GridGeometry& mg, const Pose2D& T_world_map, double robot_radius_m,
-                                        double resolution, double z_lo, double z_hi, double tolerance_m) {
-  if (world.faces.empty()) throw std::invalid_argument("groundTruthCoverage: the world mesh has no triangles");
-  if (!(resolution > 0.0) || !(robot_radius_m > 0.0) || !(z_hi > z_lo) || !(tolerance_m >= 0.0))
-    throw std::invalid_argument("groundTruthCoverage: resolution, robot radius and tolerance must be positive, z_hi > z_lo");
-  if (states.type() != CV_8U || states.cols != mg.width || states.rows != mg.height)
-    throw std::invalid_argument("groundTruthCoverage: states must be CV_8U of the map geometry's size");
-  GroundTruthCoverage out;
+ReachableFloor reachableFloor(const TriangleMesh& world, const Pose2D& start_world, double robot_radius_m,
+                              double resolution, double z_lo, double z_hi) {
+  if (world.faces.empty()) throw std::invalid_argument("the true reachable floor: the world mesh has no triangles");
+  if (!(resolution > 0.0) || !(robot_radius_m > 0.0) || !(z_hi > z_lo))
+    throw std::invalid_argument("the true reachable floor: resolution and robot radius must be positive, z_hi > z_lo");
+  ReachableFloor out;
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
   for (const Eigen::Vector3f& v : world.vertices) {
     lo = lo.cwiseMin(v.head<2>().cast<double>());
@@ -39,7 +36,7 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
   const double w = std::ceil((hi.x() - g.origin_x) / resolution) + 2, h = std::ceil((hi.y() - g.origin_y) / resolution) + 2;
   if (!(w > 0 && h > 0 && w * h <= kMaxGridCells)) {
     std::ostringstream what;
-    what << "groundTruthCoverage: the world's extent x [" << lo.x() << ", " << hi.x() << "] y [" << lo.y() << ", " << hi.y()
+    what << "the true reachable floor: the world's extent x [" << lo.x() << ", " << hi.x() << "] y [" << lo.y() << ", " << hi.y()
          << "] m needs a grid of " << w << " x " << h << " cells at " << resolution << " m, more than the limit of "
          << kMaxGridCells << " cells";
     throw std::invalid_argument(what.str());
@@ -68,26 +65,44 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
   }
   // The robot stands on the floor: where the world has floor triangles, a cell without one (beyond
   // the floor's edge) is no place for the disc either (a world without any: everywhere is floor).
-  cv::Mat blocked = out.obstacle.clone();
-  if (cv::countNonZero(floor) > 0) blocked |= (floor == 0) / 255;
+  out.blocked = out.obstacle.clone();
+  if (cv::countNonZero(floor) > 0) out.blocked |= (floor == 0) / 255;
   const cv::Point s = g.cellOf(start_world.x, start_world.y);
-  if (!g.contains(s) || blocked.at<uint8_t>(s))
-    throw std::invalid_argument("groundTruthCoverage: the start (" + std::to_string(start_world.x) + ", " +
+  if (!g.contains(s) || out.blocked.at<uint8_t>(s))
+    throw std::invalid_argument("the true reachable floor: the start (" + std::to_string(start_world.x) + ", " +
                                 std::to_string(start_world.y) + ") is outside the world, off its floor or inside an obstacle");
   // Free cells whose distance to an obstacle is at least the radius, component of the start.
   cv::Mat dist;
-  cv::distanceTransform(1 - blocked, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  cv::distanceTransform(1 - out.blocked, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
   cv::Mat centres = dist >= static_cast<float>(robot_radius_m / resolution);
-  if (!centres.at<uint8_t>(s)) throw std::invalid_argument("groundTruthCoverage: the robot disc does not fit at the start");
+  if (!centres.at<uint8_t>(s)) throw std::invalid_argument("the true reachable floor: the robot disc does not fit at the start");
   cv::Mat mask = cv::Mat::zeros(g.height + 2, g.width + 2, CV_8U);
   cv::floodFill(centres, mask, s, cv::Scalar(255), nullptr, cv::Scalar(), cv::Scalar(), 4 | cv::FLOODFILL_MASK_ONLY | (1 << 8));
-  cv::Mat comp = mask(cv::Rect(1, 1, g.width, g.height)).clone();
+  out.centres = mask(cv::Rect(1, 1, g.width, g.height)).clone();
   // Swept floor: the component grown by the robot radius, obstacles excluded.
   const int r = static_cast<int>(std::ceil(robot_radius_m / resolution));
   cv::Mat swept;
-  cv::dilate(comp, swept, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1)));
-  out.reachable = (swept != 0) & (blocked == 0);
+  cv::dilate(out.centres, swept, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * r + 1, 2 * r + 1)));
+  out.reachable = (swept != 0) & (out.blocked == 0);
   out.reachable /= 255;
+  out.reachable_m2 = cv::countNonZero(out.reachable) * g.cellArea();
+  return out;
+}
+
+GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D& start_world, const cv::Mat& states,
+                                        const GridGeometry& mg, const Pose2D& T_world_map, double robot_radius_m,
+                                        double resolution, double z_lo, double z_hi, double tolerance_m) {
+  if (world.faces.empty()) throw std::invalid_argument("groundTruthCoverage: the world mesh has no triangles");
+  if (!(resolution > 0.0) || !(robot_radius_m > 0.0) || !(z_hi > z_lo) || !(tolerance_m >= 0.0))
+    throw std::invalid_argument("groundTruthCoverage: resolution, robot radius and tolerance must be positive, z_hi > z_lo");
+  if (states.type() != CV_8U || states.cols != mg.width || states.rows != mg.height)
+    throw std::invalid_argument("groundTruthCoverage: states must be CV_8U of the map geometry's size");
+  ReachableFloor truth = reachableFloor(world, start_world, robot_radius_m, resolution, z_lo, z_hi);
+  GroundTruthCoverage out;
+  out.geometry = truth.geometry;
+  out.obstacle = truth.obstacle;
+  out.reachable = truth.reachable;
+  const GridGeometry& g = out.geometry;
   // Map floor in the world grid, grown by the tolerance.
   cv::Mat map_floor = cv::Mat::zeros(g.height, g.width, CV_8U);
   for (int row = 0; row < mg.height; ++row)

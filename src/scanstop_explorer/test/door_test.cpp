@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "scenes.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/floor_map.h"
@@ -425,6 +427,33 @@ TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCove
   ASSERT_NE(mkdtemp(pattern), nullptr);
   EXPECT_THROW(groundTruthCoverageOfMap(world, start, scanstop::MapDirectory(pattern), 0.3), std::invalid_argument);
   EXPECT_EQ(std::system((std::string("rm -rf ") + pattern).c_str()), 0);
+}
+
+TEST(GroundTruthCoverage, TheReachableFloorIsTheOneCoverageIsMeasuredOn) {
+  // reachableFloor() (the coverage oracle's floor, scanstop_eval) is groundTruthCoverage()'s reachable mask;
+  // the disc's centres lie inside it, at least the radius from every blocked cell.
+  const scanstop::TriangleMesh world = roomAndCorridor();
+  const Pose2D start(2.0, 2.0, 0.0);
+  GridGeometry mg;
+  mg.width = mg.height = 10;
+  const GroundTruthCoverage c = groundTruthCoverage(world, start, cv::Mat::zeros(10, 10, CV_8U), mg, start, 0.3);
+  const ReachableFloor f = reachableFloor(world, start, 0.3);
+  EXPECT_EQ(cv::countNonZero(f.reachable != c.reachable), 0);
+  EXPECT_NEAR(f.reachable_m2, c.reachable_m2, 1e-9);
+  EXPECT_EQ(cv::countNonZero(f.centres & (f.reachable == 0)), 0);
+  EXPECT_GT(cv::countNonZero(f.centres), 0);
+  cv::Mat dist;
+  cv::distanceTransform(1 - f.blocked, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  double min_dist = 0.0;
+  cv::minMaxLoc(dist, &min_dist, nullptr, nullptr, nullptr, f.centres);
+  EXPECT_GE(min_dist * f.geometry.resolution, 0.3 - 1e-6);
+  // A start in the wall is named.
+  try {
+    reachableFloor(world, Pose2D(0.2, -0.05, 0), 0.3);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the start (0.2"), std::string::npos) << e.what();
+  }
 }
 
 TEST(GroundTruthCoverage, OfAMapDirectoryUsesTheExplorerConfigurationGiven) {

@@ -18,6 +18,26 @@
 namespace scanstop {
 namespace explorer {
 
+/// The floor a robot disc can really reach in a world, from the world's mesh, on a world-frame grid.
+struct ReachableFloor {
+  GridGeometry geometry;  ///< world frame
+  cv::Mat obstacle;       ///< CV_8U 0/1: cells of triangles reaching into the obstacle layer
+  cv::Mat blocked;        ///< CV_8U 0/1: obstacle cells and cells off the floor (no floor triangle)
+  cv::Mat centres;        ///< CV_8U 0/1: where the disc's centre can stand, 4-connected to the start
+  cv::Mat reachable;      ///< CV_8U 0/1: the cells the disc sweeps from those centres
+  double reachable_m2 = 0.0;
+};
+
+/// Rasterises the world mesh's triangles that reach into the obstacle layer (z in [z_lo, z_hi]) onto a
+/// world-frame grid (resolution [m]), and those below z_lo as floor; free cells are floor cells
+/// (every cell when the mesh has no floor triangle) without an obstacle. Erodes the free cells by
+/// robot_radius_m (the disc stays on the floor: an edge of the floor bounds it like a wall), takes the
+/// 4-connected component of the start position (the centres) and grows it back by the radius: the
+/// true reachable floor. Throws std::invalid_argument naming a bad input (empty mesh, a grid beyond
+/// 2e7 cells, start outside the world, off its floor, inside an obstacle or where the disc does not fit).
+ReachableFloor reachableFloor(const TriangleMesh& world, const Pose2D& start_world, double robot_radius_m,
+                              double resolution = 0.05, double z_lo = 0.03, double z_hi = 0.63);
+
 struct GroundTruthCoverage {
   double reachable_m2 = 0.0;  ///< true reachable floor (cells the robot disc can sweep from the start)
   double observed_m2 = 0.0;   ///< of it, floor in the explorer's map (within tolerance)
@@ -27,13 +47,9 @@ struct GroundTruthCoverage {
   cv::Mat obstacle, reachable, observed;  ///< CV_8U 0/1
 };
 
-/// Rasterises the world mesh's triangles that reach into the obstacle layer (z in [z_lo, z_hi]) onto a
-/// world-frame grid (resolution [m]), and those below z_lo as floor; free cells are floor cells
-/// (every cell when the mesh has no floor triangle) without an obstacle. Erodes the free cells by
-/// robot_radius_m (the disc stays on the floor: an edge of the floor bounds it like a wall), takes the
-/// 4-connected component of the start position and grows it back by the radius: the true
-/// reachable floor. `states` (CellState, map frame, `map_geometry`) are the explorer's floor grid;
-/// T_world_map maps it into the world. A reachable cell is observed when a floor cell of the map
+/// The true reachable floor (reachableFloor()) against the explorer's floor grid: `states`
+/// (CellState, map frame, `map_geometry`) are the explorer's floor grid; T_world_map maps it into the
+/// world. A reachable cell is observed when a floor cell of the map
 /// lies within tolerance_m of it (SLAM drift). Throws std::invalid_argument naming a bad input
 /// (empty mesh, start inside an obstacle, bad sizes).
 GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D& start_world, const cv::Mat& states,
