@@ -29,7 +29,7 @@ constexpr const char* kUsage =
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
     "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--odom-scale-min-travel M]\n"
     "                  [--coarse-point-to-plane] [--isolated odometry|truth [--from N]]\n"
-    "                  [--no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] [--prior-sigma-deg D]\n"
+    "                  [--odometry-prior | --no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] [--prior-sigma-deg D]\n"
     "                  [--prior-sigma-angle-per-rad F] [--prior-sigma-deg-per-m D] [--information-points N]\n"
     "                  [--information-sigma M] [--prior-gate SIGMAS] [--prior-all-directions]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
@@ -143,6 +143,7 @@ int main(int argc, char** argv) {
       .flag("--no-source-centroids", config.source_centroids, false)
       .real("--degeneracy-ratio", config.icp.degeneracy_ratio, 0.0, 1.0)
       .flag("--no-remap", config.icp.degeneracy_remap, false)
+      .flag("--odometry-prior", config.odometry_prior)
       .flag("--no-odometry-prior", config.odometry_prior, false)
       .real("--prior-sigma", config.prior_sigma_m, 1e-6, 10.0)
       .real("--prior-sigma-per-m", config.prior_sigma_per_m, 0.0, 1.0)
