@@ -7,38 +7,16 @@
 #include <cstdio>
 #include <string>
 
+#include "scanstop_common/cli_test.h"
 #include "scanstop_common/stl_io.h"
 #include "scanstop_sim/world_builder.h"
 
 namespace {
 
-struct CliRun {
-  int status = -1;
-  std::string out;  ///< stdout and stderr
-};
+using scanstop::test_util::CliRun;
+using scanstop::test_util::TempDir;
 
-CliRun run(const std::string& cmd) {
-  CliRun r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
-struct TempDir {
-  std::string path;
-  TempDir() {
-    char pattern[] = "/tmp/coverage_oracle_cli_test_XXXXXX";
-    path = mkdtemp(pattern);
-  }
-  ~TempDir() {
-    if (std::system(("rm -rf '" + path + "'").c_str()) != 0) std::perror("rm");
-  }
-};
+CliRun run(const std::string& cmd) { return scanstop::test_util::runCommand(cmd); }
 
 /// A 3 x 3 m room, interior [0, 3]^2, its floor reaching 0.5 m beyond the walls, as an STL file.
 std::string writeSmallRoom(const TempDir& tmp) {
@@ -86,7 +64,7 @@ TEST(CoverageOracleCli, BadArgumentsAreNamedWithTheAllowedValues) {
 }
 
 TEST(CoverageOracleCli, AMissingWorldAStartInAWallAndAnUnknownWorldAreNamed) {
-  TempDir tmp;
+  TempDir tmp("coverage_oracle_cli_test");
   const std::string room = writeSmallRoom(tmp);
   CliRun r = run(kOracle + " " + tmp.path + "/missing.stl");
   EXPECT_EQ(r.status, 1);
@@ -103,7 +81,7 @@ TEST(CoverageOracleCli, AMissingWorldAStartInAWallAndAnUnknownWorldAreNamed) {
 }
 
 TEST(CoverageOracleCli, JsonIsValidJsonAndTheTextNamesTheCounts) {
-  TempDir tmp;
+  TempDir tmp("coverage_oracle_cli_test");
   const std::string base = kOracle + " " + writeSmallRoom(tmp) + " --start 1.5,1.5,0 --grid 1 --planes 50 --quiet";
   CliRun r = run(base + " --json");
   ASSERT_EQ(r.status, 0) << r.out;

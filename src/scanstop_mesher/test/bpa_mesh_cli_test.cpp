@@ -8,6 +8,7 @@
 #include <fstream>
 #include <string>
 
+#include "scanstop_common/cli_test.h"
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/map_dir.h"
@@ -17,23 +18,11 @@ using namespace scanstop;
 
 namespace {
 
-struct CliRun {
-  int status = -1;
-  std::string out;  ///< stdout and stderr
-};
+using scanstop::test_util::CliRun;
+using scanstop::test_util::TempDir;
 
-CliRun run(const std::string& args) {
-  CliRun r;
-  const std::string cmd = std::string(BPA_MESH_EXE) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
+/// bpa_mesh with these arguments.
+CliRun run(const std::string& args) { return scanstop::test_util::runCommand(std::string(BPA_MESH_EXE) + " " + args); }
 
 /// The number after "key": in a flat JSON object (-1 when missing).
 long jsonNumber(const std::string& json, const std::string& key) {
@@ -42,21 +31,10 @@ long jsonNumber(const std::string& json, const std::string& key) {
   return std::stol(json.substr(at + key.size() + 4));
 }
 
-struct TempDir {
-  std::string path;
-  TempDir() {
-    char pattern[] = "/tmp/bpa_mesh_cli_test_XXXXXX";
-    path = mkdtemp(pattern);
-  }
-  ~TempDir() {
-    if (std::system(("rm -rf '" + path + "'").c_str()) != 0) std::perror("rm");
-  }
-};
-
 }  // namespace
 
 TEST(BpaMeshCli, MeshesACloudWithNormalsAndPrintsJson) {
-  TempDir tmp;
+  TempDir tmp("bpa_mesh_cli_test");
   const std::string in = sharedDataPath("clouds/bun0.pcd");  // 397 points with normals
   const CliRun r = run("'" + in + "' '" + tmp.path + "/bun0.stl' --radii 0.007,0.014 --json");
   ASSERT_EQ(r.status, 0) << r.out;
@@ -79,7 +57,7 @@ TEST(BpaMeshCli, MeshesACloudWithNormalsAndPrintsJson) {
 }
 
 TEST(BpaMeshCli, BadArgumentsAndFilesAreNamed) {
-  TempDir tmp;
+  TempDir tmp("bpa_mesh_cli_test");
   const std::string in = sharedDataPath("clouds/bun0.pcd");
   CliRun r = run("'" + in + "' " + tmp.path + "/x.ply --radii 0.01,abc");
   EXPECT_EQ(r.status, 2);
@@ -101,7 +79,7 @@ TEST(BpaMeshCli, BadArgumentsAndFilesAreNamed) {
 // work (class 6; PCL said "Error during open!" without a path for .pcd), a map directory with a
 // missing scan file refused by name unless --skip-bad (class 2).
 TEST(BpaMeshCli, OptionsOutputsAndMapsFailFastByName) {
-  TempDir tmp;
+  TempDir tmp("bpa_mesh_cli_test");
   const std::string in = sharedDataPath("clouds/bun0.pcd");
   CliRun r = run("--help");
   EXPECT_EQ(r.status, 0);

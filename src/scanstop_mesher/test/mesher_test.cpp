@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "scanstop_common/cli_test.h"
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/shared_data.h"
@@ -23,16 +24,7 @@ using namespace scanstop::mesher;
 
 namespace {
 
-struct TempDir {
-  std::string path;
-  TempDir() {
-    char pattern[] = "/tmp/scanstop_mesher_test_XXXXXX";
-    path = mkdtemp(pattern);
-  }
-  ~TempDir() {
-    if (std::system(("rm -rf '" + path + "'").c_str()) != 0) std::perror("rm");
-  }
-};
+using scanstop::test_util::TempDir;
 
 /// Faces whose normal points away from every scanner position (seen from behind). A few slivers
 /// in the concave creases where walls meet the floor (whose corners' normals are blends) do.
@@ -114,7 +106,7 @@ TEST(Mesher, SingleScanOfARoomIsManifoldAndFacesTheScanner) {
 }
 
 TEST(Mesher, MapDirectoryScansAreTransformedAndOrientedPerScan) {
-  TempDir tmp;
+  TempDir tmp("scanstop_mesher_test");
   const std::string dir = tmp.path + "/map";
   const Pose2D poses[2] = {Pose2D(-1.0, 0.5, 0.3), Pose2D(0.5, -1.0, -2.0)};
   std::vector<Eigen::Vector3f> origins;

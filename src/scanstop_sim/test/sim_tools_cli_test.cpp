@@ -8,35 +8,14 @@
 #include <cstdio>
 #include <string>
 
+#include "scanstop_common/cli_test.h"
+
 namespace {
 
-struct CliRun {
-  int status = -1;
-  std::string out;  ///< stdout and stderr
-};
+using scanstop::test_util::CliRun;
+using scanstop::test_util::TempDir;
 
-CliRun run(const std::string& cmd) {
-  CliRun r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
-struct TempDir {
-  std::string path;
-  TempDir() {
-    char pattern[] = "/tmp/sim_tools_cli_test_XXXXXX";
-    path = mkdtemp(pattern);
-  }
-  ~TempDir() {
-    if (std::system(("rm -rf '" + path + "'").c_str()) != 0) std::perror("rm");
-  }
-};
+CliRun run(const std::string& cmd) { return scanstop::test_util::runCommand(cmd); }
 
 bool exists(const std::string& path) {
   struct stat st;
@@ -50,7 +29,7 @@ const std::string kWorld = std::string(SCANSTOP_WORLDS_DIR) + "/room_10x8.stl";
 }  // namespace
 
 TEST(ScanWorldCli, BadArgumentsAreNamedAndNothingIsWritten) {
-  TempDir tmp;
+  TempDir tmp("sim_tools_cli_test");
   const std::string base = kScanWorld + " " + kWorld + " " + tmp.path + "/scan.pcd";
   CliRun r = run(base + " --pose 1,1,0 --planes 37");
   EXPECT_EQ(r.status, 2);
@@ -79,7 +58,7 @@ TEST(ScanWorldCli, BadArgumentsAreNamedAndNothingIsWritten) {
 }
 
 TEST(MakeWorldsCli, BadSeedsAndMissingDirectoriesAreNamed) {
-  TempDir tmp;
+  TempDir tmp("sim_tools_cli_test");
   CliRun r = run(kMakeWorlds + " " + tmp.path + " --furnished 1x");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.out.find("make_worlds: --furnished seed 1x: not an integer in [0, 999999999]"), std::string::npos) << r.out;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string>
 
+#include "scanstop_common/cli_test.h"
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/map_dir.h"
@@ -16,34 +17,10 @@ using namespace scanstop;
 
 namespace {
 
-struct CliRun {
-  int status = -1;
-  std::string out;  ///< stdout and stderr
-};
+using scanstop::test_util::CliRun;
+using scanstop::test_util::TempDir;
 
-CliRun run(const std::string& cmd) {
-  CliRun r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
-struct TempDir {
-  std::string path;
-  TempDir() {
-    char pattern[] = "/tmp/icp_tools_cli_test_XXXXXX";
-    path = mkdtemp(pattern);
-  }
-  ~TempDir() {
-    if (std::system(("rm -rf '" + path + "'").c_str()) != 0) std::perror("rm");
-  }
-  std::string file(const std::string& name) const { return path + "/" + name; }
-};
+CliRun run(const std::string& cmd) { return scanstop::test_util::runCommand(cmd); }
 
 bool exists(const std::string& path) {
   struct stat st;
@@ -99,7 +76,7 @@ const std::string kRelaxBench = RELAX_BENCH_EXE;
 // Class 7: "--max-iterations 99999999999" answered "stoi"; "--c-max 0.1abc" and "--voxel -1" ran
 // silently; "--init nan,..." was accepted and --json then printed bare nan (invalid JSON).
 TEST(IcpRegisterCli, NumbersAreStrictAndJsonStaysJson) {
-  TempDir tmp;
+  TempDir tmp("icp_tools_cli_test");
   writeCloud(tmp.file("room.pcd"), room());
   const std::string base = kRegister + " " + tmp.file("room.pcd") + " " + tmp.file("room.pcd");
   CliRun r = run(base + " --max-iterations 99999999999");
@@ -131,7 +108,7 @@ TEST(IcpRegisterCli, NumbersAreStrictAndJsonStaysJson) {
 // Class 6: a directory given as an input file said "empty file"; a missing path without an extension
 // "unknown point-cloud format '.'".
 TEST(IcpRegisterCli, InputsAreNamedWithWhatIsWrong) {
-  TempDir tmp;
+  TempDir tmp("icp_tools_cli_test");
   writeCloud(tmp.file("room.pcd"), room());
   ASSERT_EQ(::mkdir(tmp.file("dir.pcd").c_str(), 0755), 0);
   CliRun r = run(kRegister + " " + tmp.file("dir.pcd") + " " + tmp.file("room.pcd"));
@@ -144,7 +121,7 @@ TEST(IcpRegisterCli, InputsAreNamedWithWhatIsWrong) {
 
 // Class 7: `icp_replay --help` created a folder named --help/scans; a missing map directory was created.
 TEST(IcpReplayCli, HelpAndAMissingMapCreateNothing) {
-  TempDir tmp;
+  TempDir tmp("icp_tools_cli_test");
   CliRun r = run("cd " + tmp.path + " && " + kReplay + " --help");
   EXPECT_EQ(r.status, 0);
   EXPECT_EQ(r.out.rfind("usage: icp_replay", 0), 0u) << r.out;
@@ -164,7 +141,7 @@ TEST(IcpReplayCli, HelpAndAMissingMapCreateNothing) {
 
 // Class 2: icp_replay on a map with a missing scan file went on with the rest and exited 0.
 TEST(IcpReplayCli, AMissingScanFileIsRefusedByNameUnlessSkipBad) {
-  TempDir tmp;
+  TempDir tmp("icp_tools_cli_test");
   const std::string map = makeMap(tmp.file("map"), 3);
   ASSERT_EQ(std::remove((map + "/scans/scan_0001.pcd").c_str()), 0);
   CliRun r = run(kReplay + " " + map + " --quiet");
@@ -182,7 +159,7 @@ TEST(IcpReplayCli, AMissingScanFileIsRefusedByNameUnlessSkipBad) {
 
 // Class 6: a garbage ground-truth file gave a yaml-cpp line and column without the file name.
 TEST(IcpReplayCli, ABadTruthFileIsNamed) {
-  TempDir tmp;
+  TempDir tmp("icp_tools_cli_test");
   const std::string map = makeMap(tmp.file("map"), 1);
   writeFileAtomic(tmp.file("garbage.yaml"), "scans: [ {index: 0, true_pose: [1, 2\n");
   CliRun r = run(kReplay + " " + map + " --quiet --truth " + tmp.file("garbage.yaml"));
@@ -213,7 +190,7 @@ TEST(IcpReplayCli, ABadTruthFileIsNamed) {
 // scans N on. The scans all see the same room from the same place (true poses 0), odometry says
 // 5 cm per scan: every registration comes back to the truth from a guess 5 cm off.
 TEST(IcpReplayCli, IsolatedRegistersEachScanAloneAndFromSkipsTheEarlierOnes) {
-  TempDir tmp;
+  TempDir tmp("icp_tools_cli_test");
   const std::string map = makeMap(tmp.file("map"), 4);
   writeTruthAtOrigin(tmp.file("truth.yaml"), 4);
   CliRun r = run(kReplay + " " + map + " --isolated odometry");
@@ -242,7 +219,7 @@ TEST(IcpReplayCli, IsolatedRegistersEachScanAloneAndFromSkipsTheEarlierOnes) {
 // every edge (a pairwise registration of the same room) says so: both solvers bring the start
 // poses' 9.4 cm RMS / 15 cm max back to the truth.
 TEST(RelaxBenchCli, BothSolversCorrectTheStoredPosesOnTheSameGraph) {
-  TempDir tmp;
+  TempDir tmp("icp_tools_cli_test");
   const std::string map = makeMap(tmp.file("map"), 4);
   writeTruthAtOrigin(tmp.file("truth.yaml"), 4);
   CliRun r = run(kRelaxBench + " " + map);
