@@ -264,6 +264,7 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
   res.exploration_complete = r.complete;
   res.complete_reason = r.success ? r.complete_reason : r.message;
   res.coverage = r.coverage;
+  res.scans = static_cast<uint32_t>(explorer_->scanCount());
   res.floor_area_m2 = r.floor_area_m2;
   res.accessible_area_m2 = r.accessible_area_m2;
   res.score = r.score;

@@ -1042,6 +1042,21 @@ TEST(IcpDegeneracy, AWeightedOdometryPriorTakesWhatTheFewPairsAlongTheAxisKnow) 
       EXPECT_NEAR(r->T_target_source.translation().y(), 0.0, 0.001) << what;
       EXPECT_NEAR(yawOf(r->T_target_source) * 180 / M_PI, 0.0, 0.01) << what;
     }
+    // prior_all_directions: the prior has its say across the corridor too, where the walls' many
+    // pairs outweigh it (the guess's 2 cm and 0.5 deg leave at most a millimetre and a few
+    // hundredths of a degree); along it the jamb and the prior weigh as above.
+    IcpConfig everywhere_config = c;
+    everywhere_config.prior_all_directions = true;
+    const IcpResult everywhere = icp(with_jamb, scan, guess, everywhere_config, nullptr, nullptr, &prior_information);
+    std::cout << what << ": every direction x " << everywhere.T_target_source.translation().x() * 1000 << " mm, y "
+              << everywhere.T_target_source.translation().y() * 1000 << " mm, yaw "
+              << yawOf(everywhere.T_target_source) * 180 / M_PI << " deg" << std::endl;
+    ASSERT_TRUE(everywhere.converged) << everywhere.failure;
+    EXPECT_TRUE(everywhere.remapped) << what;  // degenerate: the prior held the weak direction
+    EXPECT_LT(std::abs(everywhere.T_target_source.translation().x()), 0.02) << what;
+    EXPECT_GT(std::abs(everywhere.T_target_source.translation().x()), 0.002) << what;  // the prior still pulls
+    EXPECT_NEAR(everywhere.T_target_source.translation().y(), 0.0, 0.002) << what;
+    EXPECT_NEAR(yawOf(everywhere.T_target_source) * 180 / M_PI, 0.0, 0.05) << what;
   }
   const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(6, 6);
   EXPECT_THROW(icp(plain, scan_plain, guess, corridorConfig(IcpMethod::point_to_plane, false, true), nullptr, nullptr, &wrong),
