@@ -133,6 +133,12 @@ int main(int argc, char** argv) {
     }
   timeStep("(b) 20 scans spread over the four rooms, 8 m range", spread, {5.0, 5.0});
   timeStep("(a) 20 scans of the explorer's own first 20 steps, 6 m range", scans, robot);
+  // (c) the same with the knowledge a scan really saw and the next scan by its expected gain (issue #19).
+  cfg.planner.knowledge_model = "visibility";
+  cfg.planner.target_score = "gain";
+  cfg.planner.k_r_m = 2.5;
+  timeStep("(c) as (a), knowledge_model visibility, target_score gain, k_r_m 2.5", scans, robot);
+  std::printf("  target (%.2f, %.2f), expected gain %.1f m^2\n", last.target.x(), last.target.y(), last.target_gain_m2);
 
   // Distance transform: ours vs OpenCV's exact one, on the same floor mask.
   const cv::Mat mask = floorMask(last.states);

@@ -12,9 +12,11 @@
 #include <stdexcept>
 
 #include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/floor_map.h"
 #include "scanstop_explorer/skeleton.h"
+#include "scanstop_explorer/visibility.h"
 
 namespace scanstop {
 namespace explorer {
@@ -74,6 +76,13 @@ void PlannerConfig::validate() const {
   requireInRange("start_snap_m", start_snap_m, 0.0, 5.0, "m");
   requireInRange("target_clearance_m", target_clearance_m, 0.0, 5.0, "m");
   requireInRange("max_coverage_landmarks", max_coverage_landmarks, 0, 1e6);
+  if (knowledge_model != "disc" && knowledge_model != "visibility")
+    throw ConfigError("knowledge_model = '" + knowledge_model + "' is not one of: disc, visibility");
+  if (target_score != "knowledge" && target_score != "gain")
+    throw ConfigError("target_score = '" + target_score + "' is not one of: knowledge, gain");
+  requireInRange("gain_sample_m", gain_sample_m, 1e-6, 5.0, "m");
+  requireInRange("max_gain_samples", max_gain_samples, 1, 1e6);
+  requireInRange("min_gain_m2", min_gain_m2, 0.0, 1e6, "m^2");
 }
 
 cv::Mat floorMask(const cv::Mat& states) { return (states == kFloor) / 255; }
@@ -590,7 +599,8 @@ PlanResult computeMaps(const PlanInput& in, const PlannerConfig& cfg) {
   const double d_max_cells = cfg.d_max_m / res_m;
   const std::vector<Landmark> landmarks = selectLandmarks(res.accessible, res.sq_dt, res.anchors, res.skeleton, d_max_cells);
   timer.lap("landmarks");
-  res.knowledge = knowledgeMap(g, in.scan_positions, cfg.k_r_m);
+  res.knowledge = cfg.knowledge_model == "visibility" ? visibilityKnowledgeMap(in.states, g, in.scan_positions, cfg.k_r_m)
+                                                       : knowledgeMap(g, in.scan_positions, cfg.k_r_m);
   timer.lap("knowledge");
   res.floor_area_m2 = cv::countNonZero(in.states == kFloor) * g.cellArea();
   res.accessible_area_m2 = cv::countNonZero(res.accessible) * g.cellArea();
@@ -629,6 +639,31 @@ PlanResult computeMaps(const PlanInput& in, const PlannerConfig& cfg) {
   return res;
 }
 
+namespace {
+/// target_score "gain": the sampled candidate with the largest g / (c + c0) whose gain g reaches
+/// min_gain_m2 (first in raster order on ties); sets target_cell, score and target_gain_m2, or
+/// leaves target_cell at (-1, -1).
+void chooseByGain(PlanResult& res, const cv::Mat& candidates, const PlannerConfig& cfg) {
+  const GridGeometry& g = res.geometry;
+  const int sample = std::max(1, static_cast<int>(std::lround(cfg.gain_sample_m / g.resolution)));
+  res.gain = gainMap(res.states, g, res.knowledge, cfg.knowledge_threshold, candidates, cfg.k_r_m, sample,
+                     cfg.max_gain_samples);
+  double best = 0.0;
+  for (int r = 0; r < res.gain.rows; ++r)
+    for (int c = 0; c < res.gain.cols; ++c) {
+      const double gain = res.gain.at<float>(r, c);
+      if (gain <= 0.0 || gain < cfg.min_gain_m2) continue;
+      const double b = gain / (res.cost_map.cost.at<float>(r, c) * g.resolution + cfg.c0);
+      if (b > best) {
+        best = b;
+        res.target_cell = cv::Point(c, r);
+        res.target_gain_m2 = gain;
+      }
+    }
+  if (res.target_cell.x >= 0) res.score = best;
+}
+}  // namespace
+
 void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) {
   if (res.cost_map.cost.empty()) return;  // computeMaps failed; its message stands
   StageTimer timer(res.timings_ms);
@@ -655,6 +690,7 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   res.target_cell = cv::Point(-1, -1);
   res.target = Eigen::Vector2d(in.robot.x, in.robot.y);
   res.score = 0.0;
+  res.target_gain_m2 = -1.0;
   res.target_cost_m = 0.0;
   res.complete = res.open_cells == 0;
   if (res.complete) {
@@ -690,7 +726,10 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
       return;
     }
   } else {
-    res.target_cell = argmaxCell(res.evaluation, (res.knowledge < cfg.knowledge_threshold) | (res.open != 0));
+    const cv::Mat candidates = (res.knowledge < cfg.knowledge_threshold) | (res.open != 0);
+    if (cfg.target_score == "gain") chooseByGain(res, candidates & reached & (res.blacklist == 0), cfg);
+    if (res.target_cell.x < 0) res.target_cell = argmaxCell(res.evaluation, candidates);
+    timer.lap(cfg.target_score == "gain" ? "target_by_gain" : "target");
   }
   if (res.target_cell.x < 0) {
     res.complete = true;
@@ -700,7 +739,7 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     return;
   }
   if (!res.complete) res.complete_reason.clear();
-  res.score = res.evaluation.at<float>(res.target_cell);
+  if (res.target_gain_m2 < 0.0) res.score = res.evaluation.at<float>(res.target_cell);
   {
     const cv::Point argmax = res.target_cell;
     res.target_cell = clearTarget(res.sq_dt, reached & (res.blacklist == 0), argmax, cfg.target_clearance_m / res_m);
@@ -726,7 +765,9 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   res.message = std::string(in.goal ? (res.complete ? "exploration complete; " : "") + std::string("to the goal: ") : "") +
                 "target (" + fmt(res.target.x()) + ", " + fmt(res.target.y()) + ") m, " +
                 std::to_string(res.path.size()) + " waypoints, " + fmt(res.target_cost_m) + " m, b = " +
-                fmt(res.score, 4) + ", " + std::to_string(res.open_cells) + " open cells" +
+                fmt(res.score, 4) +
+                (res.target_gain_m2 >= 0.0 ? " (expected gain " + fmt(res.target_gain_m2, 1) + " m^2)" : std::string()) +
+                ", " + std::to_string(res.open_cells) + " open cells" +
                 (res.target_moved_m > 0.0 ? " (moved " + fmt(res.target_moved_m) + " m off the wall)" : "");
 }
 

@@ -243,7 +243,7 @@ std::string planToJson(const PlanResult& r) {
     << ", \"complete\": " << (r.complete ? "true" : "false") << ", \"complete_reason\": " << quote(r.complete_reason)
     << ", \"target\": {\"x\": " << num(r.target.x()) << ", \"y\": " << num(r.target.y()) << "}"
     << ", \"score\": " << num(r.score) << ", \"cost_m\": " << num(r.target_cost_m)
-    << ", \"target_moved_m\": " << num(r.target_moved_m) << ", \"coverage\": " << num(r.coverage)
+    << ", \"target_moved_m\": " << num(r.target_moved_m) << ", \"target_gain_m2\": " << num(r.target_gain_m2) << ", \"coverage\": " << num(r.coverage)
     << ", \"floor_area_m2\": " << num(r.floor_area_m2) << ", \"accessible_area_m2\": " << num(r.accessible_area_m2)
     << ", \"reachable_area_m2\": " << num(r.reachable_area_m2) << ", \"open_cells\": " << r.open_cells
     << ", \"landmarks\": " << (r.cost_map.nodes.empty() ? 0 : r.cost_map.nodes.size() - 1)

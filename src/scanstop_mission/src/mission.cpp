@@ -36,6 +36,8 @@ void MissionConfig::validate() const {
   requireInRange("max_scans", max_scans, 0, 100000);
   requireInRange("d_max", d_max_m, 0.05, 10.0, "m");
   requireInRange("min_scan_travel", min_scan_travel_m, 0.0, 100.0, "m");
+  requireOneOf("scan_on_the_way", scan_on_the_way, {"landmarks", "error"});
+  requireInRange("scan_error_bound", scan_error_bound_m, 1e-3, 10.0, "m");
   requireInRange("home_tolerance", home_tolerance_m, 0.01, 100.0, "m");
   requireInRange("home_scan_travel", home_scan_travel_m, 0.0, 100.0, "m");
   requireInRange("waypoint_tolerance", waypoint_tolerance_m, 0.0, 1.0, "m");
@@ -483,6 +485,17 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
   return Drive::Failed;
 }
 
+double Mission::boundAfter(const Eigen::Vector2d& next) const {
+  const Pose2D now = snapshot().estimate();
+  DeadReckoning after = dead_reckoning_;
+  const Eigen::Vector2d d = next - Eigen::Vector2d(now.x, now.y);
+  if (d.norm() > 1e-9) {
+    after.add(Pose2D(0.0, 0.0, normalizeAngle(std::atan2(d.y(), d.x()) - now.yaw)));
+    after.add(Pose2D(d.norm(), 0.0, 0.0));
+  }
+  return after.positionBoundM();
+}
+
 double Mission::freeTravel(bool dead_reckoning) const {
   if (!config_.leg_check || obstacles_.empty()) return std::numeric_limits<double>::infinity();
   Pose2D odom_now;
@@ -817,7 +830,13 @@ State Mission::run() {
       }
       const bool last = i + 1 == plan.waypoints.size();
       const bool landmark = i < plan.scan_at.size() && plan.scan_at[i];
-      const bool scan_here = last || (landmark && travel >= scan_travel);
+      const bool scan_here =
+          last || (landmark && (config_.scan_on_the_way == "error" ? boundAfter(plan.waypoints[i + 1]) > config_.scan_error_bound_m
+                                                                     : travel >= scan_travel));
+      if (scan_here && !last && config_.scan_on_the_way == "error")
+        info_("scanning on the way at (" + fmt(plan.waypoints[i].x()) + ", " + fmt(plan.waypoints[i].y()) +
+              "): after the next leg odometry's position bound would be +-" + fmt(boundAfter(plan.waypoints[i + 1])) +
+              " m (scan_error_bound " + fmt(config_.scan_error_bound_m) + " m; " + deadReckoningText() + ")");
       if (scan_here) {
         travel = 0.0;
         setPath(i, static_cast<int>(snapshot().scans.size()));

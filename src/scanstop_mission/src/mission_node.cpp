@@ -84,6 +84,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "waypoint_tolerance", config_.waypoint_tolerance_m);
   ros_params::optional(pnh, "heading_tolerance", config_.heading_tolerance_rad);
   ros_params::optional(pnh, "min_scan_travel", config_.min_scan_travel_m);
+  ros_params::optional(pnh, "scan_on_the_way", config_.scan_on_the_way);
+  ros_params::optional(pnh, "scan_error_bound", config_.scan_error_bound_m);
   ros_params::optional(pnh, "return_home", config_.return_home);
   ros_params::optional(pnh, "home_tolerance", config_.home_tolerance_m);
   ros_params::optional(pnh, "home_scan_travel", config_.home_scan_travel_m);
@@ -171,6 +173,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   // A misspelt parameter would silently keep its default: refuse it.
   const std::vector<std::string> known = {
       "run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
+      "scan_on_the_way", "scan_error_bound",
       "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts",
       "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
       "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "leg_check_turn_error",

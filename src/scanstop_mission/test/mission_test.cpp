@@ -466,6 +466,44 @@ TEST(Mission, MinScanTravelSkipsLandmarkScansAfterShortLegsOnly) {
   EXPECT_NEAR(s.scans[3].true_pose->x, 9.0, 0.1);
 }
 
+TEST(Mission, ScanOnTheWayByErrorScansAtALandmarkOnlyWhereTheNextLegWouldLeaveTheBound) {
+  // The same way as above (landmarks at (1.5, 0) and (6, 0)), straight ahead: the position bound
+  // of the leg_check error model grows by 0.04 m per metre plus the lateral error of the heading
+  // drift (0.015 rad/m). From the start, 1.5 m to the landmark and 1.5 m on make 3 m (about
+  // 0.19 m < 0.3 m): no scan at (1.5, 0). From target 1, 3 m to the landmark and 3 m on make 6 m
+  // (about 0.5 m): a scan at (6, 0). The target is always scanned.
+  for (const double bound : {0.3, 10.0}) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.insert_intermediate = true;
+    sys.targets = {{3.0, 0.0}, {9.0, 0.0}};
+    MissionConfig c = config(dir.path());
+    c.scan_on_the_way = "error";
+    c.scan_error_bound_m = bound;
+    std::vector<std::string> lines;
+    Mission m(c, sys, [&](const std::string& l) { lines.push_back(l); }, quiet);
+    EXPECT_EQ(m.run(), State::Done);
+    const MissionState s = m.snapshot();
+    std::vector<double> xs;
+    for (const auto& scan : s.scans) xs.push_back(scan.true_pose->x);
+    if (bound < 1.0) {
+      ASSERT_EQ(s.scans.size(), 4u) << "bound " << bound;  // start, target 1, landmark (6, 0), target 2
+      EXPECT_NEAR(xs[1], 3.0, 0.1);
+      EXPECT_NEAR(xs[2], 6.0, 0.1);
+      EXPECT_NEAR(xs[3], 9.0, 0.1);
+      const bool logged = std::any_of(lines.begin(), lines.end(), [](const std::string& l) {
+        return l.find("scanning on the way at (5.9") != std::string::npos &&
+               l.find("scan_error_bound 0.30 m") != std::string::npos;
+      });
+      EXPECT_TRUE(logged);
+    } else {  // no scan on the way (the fake replans once more to the far target, 0.2 m short of it)
+      for (size_t k = 2; k < xs.size(); ++k) EXPECT_NEAR(xs[k], 9.0, 0.3) << "scan " << k;
+      EXPECT_TRUE(std::none_of(lines.begin(), lines.end(),
+                               [](const std::string& l) { return l.find("scanning on the way") != std::string::npos; }));
+    }
+  }
+}
+
 TEST(Mission, CollisionMarksTargetUnreachableAndReplans) {
   TempDir dir;
   FakeSystem sys;
@@ -1180,6 +1218,18 @@ TEST(Mission, BadConfigurationNamesTheParameter) {
   c.mesh_output = "/tmp/mesh.obj";
   EXPECT_THROW(c.validate(), ConfigError);
   c.mesh_output = "/tmp/mesh.stl";
+  EXPECT_NO_THROW(c.validate());
+  c.scan_on_the_way = "always";
+  try {
+    c.validate();
+    FAIL() << "scan_on_the_way = always must be refused";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("scan_on_the_way"), std::string::npos) << e.what();
+  }
+  c.scan_on_the_way = "error";
+  c.scan_error_bound_m = 0.0;
+  EXPECT_THROW(c.validate(), ConfigError);
+  c.scan_error_bound_m = 0.15;
   EXPECT_NO_THROW(c.validate());
   c.run_dir.clear();
   EXPECT_THROW(c.validate(), ConfigError);

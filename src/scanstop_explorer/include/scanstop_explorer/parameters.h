@@ -38,6 +38,11 @@ void forEachParameter(ExplorerConfig& c, Visit&& visit) {
   visit("start_snap_m", c.planner.start_snap_m);
   visit("target_clearance_m", c.planner.target_clearance_m);
   visit("max_coverage_landmarks", c.planner.max_coverage_landmarks);
+  visit("knowledge_model", c.planner.knowledge_model);
+  visit("target_score", c.planner.target_score);
+  visit("gain_sample_m", c.planner.gain_sample_m);
+  visit("max_gain_samples", c.planner.max_gain_samples);
+  visit("min_gain_m2", c.planner.min_gain_m2);
   visit("known_free_radius_m", c.known_free_radius_m);
   visit("self_filter_radius_m", c.self_filter_radius_m);
   visit("target_tolerance_m", c.target_tolerance_m);

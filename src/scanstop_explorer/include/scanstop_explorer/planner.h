@@ -51,6 +51,19 @@ struct PlannerConfig {
   /// the drift of that leg. 0: off (the thesis' argmax as it is) [m], [0, 5]
   double target_clearance_m = 0.0;
   int max_coverage_landmarks = 2000;   ///< bound on the landmarks added for cells no landmark sees, [0, 1e6]
+  /// What a scan adds to the knowledge map: "disc" (thesis 5.4: 1 to every cell within k_r_m) or
+  /// "visibility" (1 to every cell in its plain sight within k_r_m: rays over the floor grid, stopped
+  /// by obstacle cells; a cell behind a cabinet gets nothing).
+  std::string knowledge_model = "disc";
+  /// How the next scan location is chosen among the reached cells that lack knowledge or are open:
+  /// "knowledge" (thesis: the argmax of b = 1/(k + k0) * 1/(c + c0)) or "gain" (the argmax of
+  /// g / (c + c0), g the expected gain [m^2]: the cells in plain sight within k_r_m that are unknown
+  /// or lack knowledge; on a lattice of gain_sample_m; when no candidate's gain reaches min_gain_m2,
+  /// the thesis' b).
+  std::string target_score = "knowledge";
+  double gain_sample_m = 0.25;  ///< lattice of the candidates whose gain is computed [m], (0, 5]
+  int max_gain_samples = 3000;  ///< the lattice grows coarser until at most this many candidates remain, [1, 1e6]
+  double min_gain_m2 = 0.5;     ///< a candidate that would add less is not chosen by gain [m^2], [0, 1e6]
 
   /// Throws ConfigError naming the parameter, its value and the allowed range.
   void validate() const;
@@ -125,6 +138,7 @@ CostMap computeCostMap(const cv::Mat& accessible, const std::vector<Landmark>& l
                        double d_max_cells, int max_coverage_landmarks);
 
 /// Knowledge map (thesis 5.4): each scan position adds 1 to every cell within k_r. CV_32F.
+/// (knowledge_model "visibility": visibilityKnowledgeMap(), visibility.h.)
 cv::Mat knowledgeMap(const GridGeometry& geometry, const std::vector<Eigen::Vector2d>& scan_positions, double k_r_m);
 
 /// Evaluation b = 1/(k + k0) * 1/(c + c0) with c in metres, on reached cells not in `blacklist`
@@ -194,6 +208,7 @@ struct PlanResult {
 
   cv::Mat states, sq_dt, accessible, anchors, skeleton_unpruned, skeleton, knowledge, blacklist, evaluation, open;
   cv::Mat occluded_frontier;  ///< frontier cells no scan within k_r has in plain sight (CV_8U; empty when off)
+  cv::Mat gain;               ///< target_score "gain": expected gain of the sampled candidates [m^2] (CV_32F; else empty)
   CostMap cost_map;
 
   // the plan
@@ -206,6 +221,7 @@ struct PlanResult {
   cv::Point target_cell{-1, -1};
   Eigen::Vector2d target = Eigen::Vector2d::Zero();
   double score = 0.0;                 ///< b at the target (the argmax, before a target_clearance_m move)
+  double target_gain_m2 = -1.0;       ///< the chosen candidate's expected gain [m^2] (-1: not chosen by gain)
   double target_moved_m = 0.0;        ///< how far target_clearance_m moved the target from the argmax [m]
   double target_cost_m = 0.0;         ///< travel distance to the target [m]
 

@@ -30,6 +30,15 @@ struct MissionConfig {
   /// at least this long [m]; 0 = at every landmark the explorer marks (the thesis). The target is
   /// always scanned.
   double min_scan_travel_m = 0.0;
+  /// Which intermediate landmarks of a path get a scan: "landmarks" (the thesis: every landmark
+  /// the explorer marks, once min_scan_travel_m / home_scan_travel_m have been driven) or "error"
+  /// (only where going on without one would let the pose grow too uncertain: the robot scans at a
+  /// landmark when what odometry cannot see (DeadReckoning, the leg_check_* error model) would,
+  /// after the next leg's turn and length, exceed scan_error_bound_m of position; issue #19 point
+  /// 4). The target is always scanned.
+  std::string scan_on_the_way = "landmarks";
+  /// "error" mode: the position bound past which the robot scans first [m], (0, 10]
+  double scan_error_bound_m = 0.15;
   /// Once exploration is complete, drive back to the first scan's position (scanning on the way as
   /// on any path, and at the end) before the mission ends: the robot comes back, and its last
   /// scan registers against the well-mapped start instead of the far end of a corridor.
@@ -180,6 +189,9 @@ class Mission {
   /// points obstruct it (leg_check); +inf without a scan to check against.
   /// With `dead_reckoning` false, the plain disc (as if odometry were exact since the scan).
   double freeTravel(bool dead_reckoning = true) const;
+  /// The position bound of what odometry cannot see (dead_reckoning_) once the robot has turned
+  /// towards `next` (map frame) from its estimate and driven there [m].
+  double boundAfter(const Eigen::Vector2d& next) const;
   bool contactBoundReached() const;
   bool checkControl();  ///< waits while paused; false when aborted
   void backoff(int attempt);  ///< waits attempt * retry_backoff_s (returns early on abort)

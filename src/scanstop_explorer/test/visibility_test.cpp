@@ -1,0 +1,178 @@
+// Knowledge from what a scan really saw and the next scan by what it will add (issue #19 points 2
+// and 3): RayCaster, visibilityKnowledgeMap, gainMap and the planner's "visibility" / "gain" modes.
+#include <gtest/gtest.h>
+
+#include "scenes.h"
+#include "scanstop_common/error.h"
+#include "scanstop_explorer/planner.h"
+#include "scanstop_explorer/visibility.h"
+
+using namespace scanstop::explorer;
+using scanstop::Pose2D;
+
+namespace {
+PlanInput inputFor(const test::Scene& s, const cv::Mat& states, const std::vector<Eigen::Vector2d>& scans,
+                   const Eigen::Vector2d& robot) {
+  PlanInput in;
+  in.states = states;
+  in.geometry = s.geometry;
+  in.scan_positions = scans;
+  in.robot = Pose2D(robot.x(), robot.y(), 0.0);
+  return in;
+}
+float at(const cv::Mat& m, const GridGeometry& g, double x, double y) { return m.at<float>(g.cellOf(x, y)); }
+}  // namespace
+
+TEST(VisibilityKnowledge, ACellBehindAWallWithinTheRadiusGetsNothingTheDiscGivesItOne) {
+  const test::Scene s = test::twoRooms();  // the shared wall at x 4.0-4.2, its door at y 1.5-2.5
+  const cv::Mat states = test::idealStates(s);
+  const std::vector<Eigen::Vector2d> scans{{3.0, 0.5}};
+  const cv::Mat disc = knowledgeMap(s.geometry, scans, 2.5);
+  const cv::Mat vis = visibilityKnowledgeMap(states, s.geometry, scans, 2.5);
+  // (5.0, 0.5): 2 m away, behind the wall.
+  EXPECT_FLOAT_EQ(at(disc, s.geometry, 5.0, 0.5), 1.0f);
+  EXPECT_FLOAT_EQ(at(vis, s.geometry, 5.0, 0.5), 0.0f);
+  // In sight: the scan's own cell, the room, and room 2 through the door.
+  EXPECT_FLOAT_EQ(at(vis, s.geometry, 3.0, 0.5), 1.0f);
+  EXPECT_FLOAT_EQ(at(vis, s.geometry, 1.0, 2.0), 1.0f);
+  EXPECT_FLOAT_EQ(at(vis, s.geometry, 4.6, 2.2), 1.0f);
+  // Beyond the range: nothing in either model.
+  EXPECT_FLOAT_EQ(at(vis, s.geometry, 0.2, 3.8), 0.0f);
+  EXPECT_FLOAT_EQ(at(disc, s.geometry, 0.2, 3.8), 0.0f);
+  // Against the exact line-of-sight of the scene (free cells within the range whose segment to the
+  // scanner crosses free cells only): every such cell is credited but a handful at grazing angles,
+  // and no credited cell lies outside the free floor.
+  const cv::Mat truth = test::visibleFree(s, scans[0], 2.5);
+  const int seen = cv::countNonZero(truth);
+  const int credited_seen = cv::countNonZero(truth & (vis > 0));
+  EXPECT_GE(credited_seen, 0.97 * seen) << credited_seen << " of " << seen;
+  EXPECT_EQ(cv::countNonZero((vis > 0) & (s.free == 0)), 0);
+  // Obstacle cells are never credited and a wall cell with floor on both sides stops the rays:
+  // room 2's floor away from the door is dark.
+  EXPECT_EQ(cv::countNonZero((vis > 0) & (states == kObstacle)), 0);
+  EXPECT_FLOAT_EQ(at(vis, s.geometry, 4.5, 0.3), 0.0f);
+}
+
+TEST(VisibilityKnowledge, EveryScanAddsOneAndAPositionOffTheGridAddsNothing) {
+  const test::Scene s = test::twoRooms();
+  const cv::Mat states = test::idealStates(s);
+  const cv::Mat k = visibilityKnowledgeMap(states, s.geometry, {{1.0, 1.0}, {1.5, 1.0}, {-50.0, 0.0}}, 2.0);
+  EXPECT_FLOAT_EQ(at(k, s.geometry, 1.25, 1.0), 2.0f);  // each cell once per scan, however many rays cross it
+  EXPECT_FLOAT_EQ(at(k, s.geometry, 3.3, 1.0), 1.0f);   // 2.3 m from the first, 1.8 m from the second
+  double max = 0.0;
+  cv::minMaxLoc(k, nullptr, &max);
+  EXPECT_FLOAT_EQ(max, 2.0f);
+}
+
+TEST(GainMap, TheAreaInSightThatIsUnknownOrLacksKnowledge) {
+  // A closed 4 x 4 m room, all floor, nothing known yet: from its middle a scan with a long range
+  // would add the whole room.
+  test::Scene s = test::emptyScene(4.0, 4.0);
+  test::box(s, 0, 0, 4.0, 4.0, 1);
+  const cv::Mat states = test::idealStates(s);
+  const double room_m2 = cv::countNonZero(s.free) * s.geometry.cellArea();
+  cv::Mat knowledge = cv::Mat::zeros(states.size(), CV_32F);
+  cv::Mat candidates = cv::Mat::zeros(states.size(), CV_8U);
+  candidates.at<uint8_t>(s.geometry.cellOf(2.0, 2.0)) = 1;
+  cv::Mat sampled;
+  cv::Mat gain = gainMap(states, s.geometry, knowledge, 1.0, candidates, 10.0, 1, 100, &sampled);
+  EXPECT_NEAR(at(gain, s.geometry, 2.0, 2.0), room_m2, 0.01 * room_m2);
+  EXPECT_EQ(cv::countNonZero(sampled), 1);
+  // Once the room is known there is nothing to gain; unknown cells count like unknown floor.
+  knowledge.setTo(1.0f);
+  gain = gainMap(states, s.geometry, knowledge, 1.0, candidates, 10.0, 1, 100);
+  EXPECT_FLOAT_EQ(at(gain, s.geometry, 2.0, 2.0), 0.0f);
+  cv::Mat half = states.clone();  // the floor from x = 2.5 m on not seen yet
+  for (int r = 0; r < half.rows; ++r)
+    for (int c = 0; c < half.cols; ++c)
+      if (half.at<uint8_t>(r, c) == kFloor && s.geometry.center({c, r}).x() >= 2.5) half.at<uint8_t>(r, c) = kUnknown;
+  gain = gainMap(half, s.geometry, knowledge, 1.0, candidates, 10.0, 1, 100);
+  EXPECT_NEAR(at(gain, s.geometry, 2.0, 2.0), 1.5 * 4.0, 0.25);
+  // The lattice: every 4th cell of a full candidate mask, coarser until at most 10 remain.
+  candidates.setTo(1);
+  gainMap(states, s.geometry, knowledge, 1.0, candidates, 2.0, 4, 1000000, &sampled);
+  EXPECT_EQ(cv::countNonZero(sampled), ((states.rows + 3) / 4) * ((states.cols + 3) / 4));
+  gainMap(states, s.geometry, knowledge, 1.0, candidates, 2.0, 4, 10, &sampled);
+  EXPECT_LE(cv::countNonZero(sampled), 10);
+  EXPECT_GT(cv::countNonZero(sampled), 0);
+}
+
+TEST(GainChoice, InTwoRoomsTheDoorsFarSideBeatsASeenCorner) {
+  // Room 1 scanned from two spots near its middle; its far corners lie beyond the knowledge
+  // radius of both (the thesis' disc: k = 0 there although the scans saw them), room 2 was seen
+  // only through the door.
+  const test::Scene s = test::twoRooms();
+  const std::vector<Eigen::Vector2d> scans{{1.6, 2.0}, {2.4, 2.0}};
+  const cv::Mat states = test::seenStates(s, scans, 6.0);
+  const PlanInput in = inputFor(s, states, scans, scans.back());
+  PlannerConfig thesis;
+  thesis.k_r_m = 1.5;
+  const PlanResult by_knowledge = planStep(in, thesis);
+  ASSERT_TRUE(by_knowledge.success) << by_knowledge.message;
+  ASSERT_FALSE(by_knowledge.complete);
+  EXPECT_LT(by_knowledge.target.x(), 4.0) << "the thesis' b picks a corner of the scanned room";
+  EXPECT_LT(by_knowledge.target_gain_m2, 0.0);
+
+  PlannerConfig gain = thesis;
+  gain.knowledge_model = "visibility";
+  gain.target_score = "gain";
+  const PlanResult by_gain = planStep(in, gain);
+  ASSERT_TRUE(by_gain.success) << by_gain.message;
+  ASSERT_FALSE(by_gain.complete);
+  EXPECT_GT(by_gain.target.x(), 4.2) << "the gain picks room 2, beyond the door";
+  EXPECT_GT(by_gain.target_gain_m2, 1.0);
+  EXPECT_NE(by_gain.message.find("expected gain"), std::string::npos) << by_gain.message;
+  // It is the best gain per cost among the sampled candidates.
+  double best = 0.0;
+  for (int r = 0; r < by_gain.gain.rows; ++r)
+    for (int c = 0; c < by_gain.gain.cols; ++c) {
+      const float g = by_gain.gain.at<float>(r, c);
+      if (g >= gain.min_gain_m2)
+        best = std::max(best, g / (by_gain.cost_map.cost.at<float>(r, c) * s.geometry.resolution + gain.c0));
+    }
+  EXPECT_NEAR(by_gain.score, best, 1e-6);
+}
+
+TEST(GainChoice, ExploresTwoRoomsToTheEndWithEveryFloorCellSeen) {
+  PlannerConfig cfg;
+  cfg.k_r_m = 2.5;
+  cfg.knowledge_model = "visibility";
+  cfg.target_score = "gain";
+  const test::Scene s = test::twoRooms();
+  const double range = 3.0;
+  std::vector<Eigen::Vector2d> scans{{1.0, 1.0}};
+  Eigen::Vector2d robot = scans.back();
+  bool complete = false;
+  int steps = 0;
+  for (; steps < 40 && !complete; ++steps) {
+    const cv::Mat states = test::seenStates(s, scans, range);
+    const PlanResult r = planStep(inputFor(s, states, scans, robot), cfg);
+    ASSERT_TRUE(r.success) << r.message;
+    complete = r.complete;
+    if (!complete) {
+      robot = r.target;
+      scans.push_back(r.target);  // a scan at the target only
+    }
+  }
+  ASSERT_TRUE(complete) << "not complete after " << steps << " steps";
+  const cv::Mat states = test::seenStates(s, scans, range);
+  EXPECT_EQ(cv::countNonZero(s.free & (states != kFloor)), 0);
+  EXPECT_LE(scans.size(), 6u);
+}
+
+TEST(PlannerConfig, NamesABadKnowledgeModelOrTargetScore) {
+  PlannerConfig c;
+  c.knowledge_model = "cone";
+  try {
+    c.validate();
+    FAIL() << "no ConfigError";
+  } catch (const scanstop::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("knowledge_model = 'cone'"), std::string::npos) << e.what();
+  }
+  c = PlannerConfig();
+  c.target_score = "";
+  EXPECT_THROW(c.validate(), scanstop::ConfigError);
+  c = PlannerConfig();
+  c.gain_sample_m = 0.0;
+  EXPECT_THROW(c.validate(), scanstop::ConfigError);
+}
