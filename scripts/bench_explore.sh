@@ -8,6 +8,9 @@
 # modelled scan time (target: under 2 s of compute per cycle against 40 s per scan). The default list
 # also runs room_10x8 with min_scan_travel 2.0, the issue's acceptance run (<= 21 scans, >= 95 % of
 # the reachable floor, no collisions, final SLAM error <= 3 cm), and says whether it passes.
+# It prints the surface the map holds (summary.json surface_coverage: the share of the surface visible
+# from the reachable floor that lies within 3 cm of a map point) and the modelled mission time split
+# into scanning, driving and compute.
 # Next to every run's scans it prints the known-map reference of its world (coverage_oracle,
 # scanstop_eval: the fewest perfect scans that see 99 % of the reachable floor, from the same start)
 # and the ratio scans / reference; the reference is computed once per world and start and kept in
@@ -86,8 +89,8 @@ done
 /usr/bin/python3 - "$out" "${worlds[@]}" <<'PY'
 import json, os, sys
 out, entries = sys.argv[1], sys.argv[2:]
-print("\n| run | state | scans | reference (99 % floor) | scans / reference | coverage (true) | collisions | min clearance (legs < 5 cm) | ATE RMS / max (scan) | final SLAM error | odometry ATE RMS / final | compute/cycle mean (max) | scan time | mission wall time |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("\n| run | state | scans | reference (99 % floor) | scans / reference | coverage (true) | surface held (true) | modelled time: scanning + driving + compute | collisions | min clearance (legs < 5 cm) | ATE RMS / max (scan) | final SLAM error | odometry ATE RMS / final | compute/cycle mean (max) | scan time | mission wall time |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 verdicts = []
 for e in entries:
     name = e.replace(":=", "=")
@@ -105,9 +108,13 @@ for e in entries:
     ate = "-" if s.get("ate_rms_m") is None else "%s / %s (%d)" % (err("ate_rms_m"), err("ate_max_m"), s["ate_max_scan"])
     clear = "-" if s.get("min_clearance_m") is None else "%s (%d of %d)" % (
         err("min_clearance_m"), s["legs_closer_than_5cm"], s["legs_measured"])
-    print("| %s | %s | %d | %s | %s | %.1f %% (%s) | %d | %s | %s | %s | %s / %s | %.2f s (%.2f s) | %.0f s | %.0f s |" % (
+    surface = "-" if s.get("surface_coverage") is None else "%.1f %%" % (100 * s["surface_coverage"])
+    minutes = lambda k: "-" if s.get(k) is None else "%.1f" % (s[k] / 60.0)
+    time_split = "%s min: %s + %s + %s" % (minutes("modelled_time_s"), minutes("modelled_scanning_s"),
+                                            minutes("modelled_driving_s"), minutes("modelled_compute_s"))
+    print("| %s | %s | %d | %s | %s | %.1f %% (%s) | %s | %s | %d | %s | %s | %s | %s / %s | %.2f s (%.2f s) | %.0f s | %.0f s |" % (
         e, s["state"], s["scans"], "-" if ref is None else ref, ratio, 100 * s["coverage"], "-" if true_cov is None else "%.1f %%" % (100 * true_cov),
-        s["collisions"], clear, ate, err("final_slam_error_m"), err("odometry_ate_rms_m"), err("final_odometry_error_m"),
+        surface, time_split, s["collisions"], clear, ate, err("final_slam_error_m"), err("odometry_ate_rms_m"), err("final_odometry_error_m"),
         s["compute_per_cycle_mean_s"], s["compute_per_cycle_max_s"], s["scan_time_mean_s"], s["elapsed_s"]))
     if e == "room_10x8+min_scan_travel:=2.0":
         checks = [("DONE", s["state"] == "DONE"), ("<= 21 scans", s["scans"] <= 21),

@@ -29,11 +29,15 @@ if ! /usr/bin/python3 - "$run/summary.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
 tc, area = s.get("true_coverage"), s.get("true_reachable_floor_m2")
-print("check_mission_replay: coverage %s (explorer's map), true coverage %s of %s m2" % (s["coverage"], tc, area))
-sys.exit(0 if isinstance(tc, float) and 0.2 < tc <= 1.0 and 90.0 < area < 100.0 else 1)
+sc, visible = s.get("surface_coverage"), s.get("surface_visible_elements")
+print("check_mission_replay: coverage %s (explorer's map), true coverage %s of %s m2, visible surface held %s of %s "
+      "elements" % (s["coverage"], tc, area, sc, visible))
+# The surface: a short run holds some of the room's visible surface (104,621 5 cm elements at 100 planes).
+sys.exit(0 if isinstance(tc, float) and 0.2 < tc <= 1.0 and 90.0 < area < 100.0 and isinstance(sc, float) and
+         0.1 < sc <= 1.0 and isinstance(visible, int) and 50000 < visible < 400000 else 1)
 PY
 then
-  echo "check_mission_replay: summary.json has no plausible true_coverage (room_10x8: 96 m2 of reachable floor)"; exit 1
+  echo "check_mission_replay: summary.json has no plausible true_coverage (room_10x8: 96 m2 of reachable floor) or surface_coverage"; exit 1
 fi
 # The mission ends with make_report.py (html_report): report.html, its plots and the explorer's
 # georeferenced floor map they draw on, linked from report.md.

@@ -188,6 +188,21 @@ CoverResult coverOf(const std::vector<ElementSet>& sets, size_t universe, size_t
   return out;
 }
 
+/// What the oracle scans in: the true reachable floor, its cells, the surface elements and the
+/// candidate lattice.
+struct Scene {
+  Scene(const TriangleMesh& mesh, const Pose2D& start, const OracleConfig& config)
+      : truth(explorer::reachableFloor(mesh, start, config.robot_radius_m, config.raster_m, config.z_lo_m,
+                                       config.z_hi_m)),
+        floor(truth, config.cellsPerFloorCell()),
+        surface(mesh, config.surface_cell_m, config.z_lo_m),
+        lattice(latticeOnCentres(truth, start, config.grid_m)) {}
+  explorer::ReachableFloor truth;
+  FloorCells floor;
+  SurfaceElements surface;
+  std::vector<Eigen::Vector2d> lattice;
+};
+
 }  // namespace
 
 void OracleConfig::validate() const {
@@ -220,21 +235,18 @@ OracleResult runCoverageOracle(sim::Simulator& sim, const Pose2D& start, const O
                                const std::function<void(size_t, size_t)>& progress) {
   config.validate();
   Clock::time_point t0 = Clock::now();
-  const TriangleMesh& mesh = sim.world().mesh();
-  const explorer::ReachableFloor truth =
-      explorer::reachableFloor(mesh, start, config.robot_radius_m, config.raster_m, config.z_lo_m, config.z_hi_m);
-  const FloorCells floor(truth, config.cellsPerFloorCell());
-  const SurfaceElements surface(mesh, config.surface_cell_m, config.z_lo_m);
+  const Scene scene(sim.world().mesh(), start, config);
+  const FloorCells& floor = scene.floor;
+  const SurfaceElements& surface = scene.surface;
   OracleResult out;
   out.start = start;
   out.floor_cells = floor.size();
-  out.reachable_m2 = truth.reachable_m2;
+  out.reachable_m2 = scene.truth.reachable_m2;
   out.surface_elements = surface.size();
-  const std::vector<Eigen::Vector2d> lattice = latticeOnCentres(truth, start, config.grid_m);
   out.setup_s = secondsSince(t0);
 
   t0 = Clock::now();
-  Sightings seen = scanCandidates(sim, lattice, start.yaw, floor, surface, config, progress);
+  Sightings seen = scanCandidates(sim, scene.lattice, start.yaw, floor, surface, config, progress);
   out.candidates = std::move(seen.candidates);
   out.candidates_refused = seen.refused;
   out.scan_s = secondsSince(t0);
@@ -245,6 +257,21 @@ OracleResult runCoverageOracle(sim::Simulator& sim, const Pose2D& start, const O
   out.floor = coverOf(seen.floor, floor.size(), floor.size(), config);
   out.surface = coverOf(seen.surface, surface.size(), out.surface_visible, config);
   out.cover_s = secondsSince(t0);
+  return out;
+}
+
+VisibleSurface visibleSurface(sim::Simulator& sim, const Pose2D& start, const OracleConfig& config,
+                              const std::function<void(size_t, size_t)>& progress) {
+  config.validate();
+  const Clock::time_point t0 = Clock::now();
+  Scene scene(sim.world().mesh(), start, config);
+  const Sightings seen = scanCandidates(sim, scene.lattice, start.yaw, scene.floor, scene.surface, config, progress);
+  VisibleSurface out{std::move(scene.surface), {}, 0, seen.candidates.size(), seen.refused, 0.0};
+  out.visible.assign(out.elements.size(), 0);
+  for (const ElementSet& s : seen.surface)
+    for (const uint32_t id : s) out.visible[id] = 1;
+  out.visible_count = static_cast<size_t>(std::count(out.visible.begin(), out.visible.end(), 1));
+  out.seconds = secondsSince(t0);
   return out;
 }
 

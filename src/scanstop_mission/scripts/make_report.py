@@ -98,7 +98,7 @@ def pose3(value, path, what):
 
 
 def read_state(path):
-    """mission_state.yaml: {index: {coverage, true_pose, scan_time_s}}, the top-level mapping."""
+    """mission_state.yaml: {index: {coverage, true_pose, scan_time_s, mission_time_s}}, the top-level mapping."""
     data = read_yaml(path)
     scans = {}
     for i, s in enumerate(data.get("scans") or []):
@@ -108,7 +108,8 @@ def read_state(path):
             scans[int(s["index"])] = {
                 "coverage": float(s["coverage"]) if s.get("coverage") is not None else None,
                 "true_pose": pose3(s.get("true_pose"), path, "scans[%d].true_pose" % i),
-                "scan_time_s": float(s.get("scan_time_s") or 0.0)}
+                "scan_time_s": float(s.get("scan_time_s") or 0.0),
+                "mission_time_s": float(s["mission_time_s"]) if s.get("mission_time_s") is not None else None}
         except (TypeError, ValueError):
             raise InputError("%s: scans[%d] has a field that is not a number" % (path, i))
     return data, scans
@@ -185,11 +186,16 @@ class Run:
         self.odom = [p["odom"] for p in self.poses]
         self.truth = [self.scan_state.get(i, {}).get("true_pose") for i in self.index]
         self.coverage = [self.scan_state.get(i, {}).get("coverage") for i in self.index]
-        # Mission time at the end of each scan: the stamps count from the start of the first scan
-        # (modelled time in simulation, the clock on the robot).
-        t0 = self.poses[0]["stamp_s"] - self.scan_state.get(self.index[0], {}).get("scan_time_s", 0.0) \
-            if self.poses else 0.0
-        self.time_min = [(p["stamp_s"] - t0) / 60.0 for p in self.poses]
+        # Mission time of each scan's coverage: the mission's modelled time when it was known
+        # (scanning, driving and compute; mission_state.yaml's mission_time_s), else the stamps counted
+        # from the start of the first scan (modelled time in simulation, the clock on the robot).
+        mission_times = [self.scan_state.get(i, {}).get("mission_time_s") for i in self.index]
+        if mission_times and all(t is not None and t > 0.0 for t in mission_times):
+            self.time_min = [t / 60.0 for t in mission_times]
+        else:
+            t0 = self.poses[0]["stamp_s"] - self.scan_state.get(self.index[0], {}).get("scan_time_s", 0.0) \
+                if self.poses else 0.0
+            self.time_min = [(p["stamp_s"] - t0) / 60.0 for p in self.poses]
         self.has_truth = any(t is not None for t in self.truth)
         if not self.has_truth:
             self.notes.append("no true poses (a run on the robot, or before the simulator's ground truth): "
@@ -242,11 +248,17 @@ def plot_coverage(run, plt, path):
         tc = float(run.true_coverage) * 100.0
         ax_s.plot([scans[-1]], [tc], "*", color="tab:green", ms=12, label="true coverage (world), at the end")
         ax_t.plot([run.time_min[-1]], [tc], "*", color="tab:green", ms=12, label="true coverage (world), at the end")
+    surface = run.summary.get("surface_coverage")
+    if surface is not None and scans:
+        sc = float(surface) * 100.0
+        ax_s.plot([scans[-1]], [sc], "D", color="tab:purple", ms=7, label="visible surface held (world), at the end")
+        ax_t.plot([run.time_min[-1]], [sc], "D", color="tab:purple", ms=7,
+                  label="visible surface held (world), at the end")
     for ax in (ax_s, ax_t):
         ax.set_ylim(0, 105)
         ax.grid(alpha=0.3)
         ax.legend(loc="lower right", fontsize=8)
-    ax_s.set_ylabel("coverage of the reachable floor [%]")
+    ax_s.set_ylabel("coverage [%] (of the reachable floor)")
     if not ax_s.get_xlabel():
         ax_s.set_xlabel("scans")
     ax_s.xaxis.set_major_locator(MaxNLocator(integer=True))
@@ -369,6 +381,12 @@ def write_html(run, out_dir, images):
             ("collisions", html.escape(str(s.get("collisions", run.state.get("collisions", "-"))))),
             ("modelled mission time", fmt(s.get("modelled_time_s", run.state.get("modelled_time_s")), 1 / 60.0, 1,
                                           " min"))]
+    if s.get("modelled_scanning_s") is not None:
+        rows.append(("... of it scanning / driving / compute", "%s / %s / %s" % (
+            fmt(s.get("modelled_scanning_s"), 1 / 60.0, 1, " min"), fmt(s.get("modelled_driving_s"), 1 / 60.0, 1, " min"),
+            fmt(s.get("modelled_compute_s"), 1 / 60.0, 1, " min"))))
+    if s.get("surface_coverage") is not None:
+        rows.insert(5, ("surface held by the map (world)", fmt(s.get("surface_coverage"), 100.0, 1, " %")))
     err = pose_errors(run)
     if err:
         rms = math.sqrt(sum(e[1] ** 2 for e in err) / len(err))

@@ -328,6 +328,7 @@ bool Mission::scanAndRegister() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     state_.modelled_time_s += scan.duration_s;
+    state_.modelled_scan_s += scan.duration_s;
     state_.odom_now = scan.odom_pose;
   }
   // The leg check's obstacles: the points in the body's height band, off the robot itself.
@@ -383,6 +384,9 @@ bool Mission::scanAndRegister() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     record.coverage = state_.coverage;
+    state_.modelled_time_s += reg.duration_s;
+    state_.modelled_compute_s += reg.duration_s;
+    record.mission_time_s = state_.modelled_time_s;
     state_.scans.push_back(record);
     state_.last_map_pose = reg.map_pose;
     state_.odom_at_last_scan = scan.odom_pose;
@@ -527,6 +531,7 @@ void Mission::noteMotion(const MotionResult& r, bool leg) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     state_.modelled_time_s += r.duration_s;
+    state_.modelled_drive_s += r.duration_s;
     if (r.success || r.collision) {
       dead_reckoning_.add(state_.odom_now.inverse() * r.odom_pose);
       state_.odom_now = r.odom_pose;
@@ -717,7 +722,11 @@ State Mission::run() {
         state_.plans += 1;
         state_.coverage = plan.coverage;
         state_.modelled_time_s += plan.duration_s;
-        if (!state_.scans.empty()) state_.scans.back().coverage = plan.coverage;
+        state_.modelled_compute_s += plan.duration_s;
+        if (!state_.scans.empty()) {
+          state_.scans.back().coverage = plan.coverage;
+          state_.scans.back().mission_time_s = state_.modelled_time_s;
+        }
       }
       if (plan.complete) {
         std::lock_guard<std::mutex> lock(mutex_);

@@ -18,6 +18,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
+#include "scanstop_eval/surface_coverage.h"
 #include "scanstop_explorer/explorer_ros.h"
 #include "scanstop_explorer/ground_truth.h"
 #include "scanstop_common/ros/msg_conversion.h"
@@ -134,6 +135,10 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   robot_radius_given_ = pnh.hasParam("robot_radius");
   ros_params::optional(pnh, "robot_radius", robot_radius_m_);
   ros_params::optional(pnh, "explorer_ns", explorer_ns_);
+  ros_params::optional(pnh, "surface_planes", surface_planes_);
+  if (surface_planes_ < 0 || surface_planes_ > 2000)
+    throw ConfigError("parameter '" + pnh.resolveName("surface_planes") + "' = " + std::to_string(surface_planes_) +
+                      " must be in [0, 2000] (0: no surface coverage)");
   if (!(robot_radius_m_ > 0.0 && robot_radius_m_ <= 5.0))
     throw ConfigError("parameter '" + pnh.resolveName("robot_radius") + "' = " + std::to_string(robot_radius_m_) +
                       " m must be in (0, 5] m");
@@ -180,7 +185,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
       "leg_check_drift", "leg_check_distance_error", "relocalize_min_travel", "relocalize_min_turn", "max_step_retries", "retry_backoff",
       "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir", "wait_for_service_timeout", "scan_timeout",
       "motion_timeout", "register_timeout", "plan_timeout", "mesh_timeout", "autostart", "shutdown_when_done",
-      "mesh_output", "world_file", "world_frame", "map_frame", "robot_radius", "explorer_ns", "run_identity",
+      "mesh_output", "world_file", "world_frame", "map_frame", "robot_radius", "explorer_ns", "surface_planes", "run_identity",
       "master_timeout", "html_report", "report_script"};
   const std::vector<std::string> unknown = ros_params::unknownParameters(pnh, known);
   if (!unknown.empty()) {
@@ -292,12 +297,38 @@ std::optional<TrueCoverage> MissionNode::trueCoverage() {
   const double robot_radius = robot_radius_given_ ? robot_radius_m_ : explorer_config.planner.robot_radius_m;
   try {
     const TriangleMesh world = readStl(world_file_);
-    const explorer::GroundTruthCoverage c = explorer::groundTruthCoverageOfMap(
-        world, *start, MapDirectory(map_dir_), robot_radius, 0.1, nullptr, explorer_config);
-    return TrueCoverage{c.coverage, c.reachable_m2};
+    const MapDirectory map(map_dir_);
+    const explorer::GroundTruthCoverage c =
+        explorer::groundTruthCoverageOfMap(world, *start, map, robot_radius, 0.1, nullptr, explorer_config);
+    TrueCoverage truth{c.coverage, c.reachable_m2, std::nullopt, 0};
+    if (surface_planes_ > 0) surfaceCoverage(world, *start, map, robot_radius, truth);
+    return truth;
   } catch (const std::exception& e) {
     ROS_WARN("mission: no true coverage (%s: %s)", world_file_.c_str(), e.what());
     return std::nullopt;
+  }
+}
+
+void MissionNode::surfaceCoverage(const TriangleMesh& world, const Pose2D& start, const MapDirectory& map,
+                                  double robot_radius, TrueCoverage& truth) {
+  // The surface visible from the truly reachable floor: the coverage oracle's candidate scans
+  // (perfect, surface_planes planes, every 0.5 m), then the map's points within 3 cm of it.
+  try {
+    sim::SimConfig sim_config;
+    sim_config.errors = sim::makeProfile("perfect");
+    sim::Simulator sim(sim::World::fromMesh(world, fileStem(world_file_)), sim_config, start);
+    eval::OracleConfig oracle;
+    oracle.planes = surface_planes_;
+    oracle.robot_radius_m = robot_radius;
+    const eval::VisibleSurface visible = eval::visibleSurface(sim, start, oracle);
+    const eval::MapSurfaceCoverage held = eval::mapSurfaceCoverage(visible, map, start, oracle.surface_tolerance_m);
+    truth.surface_coverage = held.share;
+    truth.surface_visible = held.visible;
+    ROS_INFO("mission: the map holds %.1f %% of the %zu surface elements visible from the reachable floor "
+             "(%zu candidate scans of %d planes, %.1f s)",
+             held.share * 100.0, held.visible, visible.candidates, surface_planes_, visible.seconds);
+  } catch (const std::exception& e) {
+    ROS_WARN("mission: no surface coverage (%s: %s)", world_file_.c_str(), e.what());
   }
 }
 

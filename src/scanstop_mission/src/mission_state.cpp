@@ -51,6 +51,9 @@ void MissionState::save(const std::string& path) const {
   root["last_error"] = last_error;
   root["elapsed_s"] = elapsed_s;
   root["modelled_time_s"] = modelled_time_s;
+  root["modelled_scan_s"] = modelled_scan_s;
+  root["modelled_drive_s"] = modelled_drive_s;
+  root["modelled_compute_s"] = modelled_compute_s;
   root["last_map_pose"] = poseNode(last_map_pose);
   root["odom_at_last_scan"] = poseNode(odom_at_last_scan);
   root["odom_now"] = poseNode(odom_now);
@@ -86,6 +89,7 @@ void MissionState::save(const std::string& path) const {
     n["register_wall_s"] = s.register_wall_s;
     n["plan_wall_s"] = s.plan_wall_s;
     n["coverage"] = s.coverage;
+    n["mission_time_s"] = s.mission_time_s;
     scan_list.push_back(n);
   }
   root["scans"] = scan_list;
@@ -142,6 +146,9 @@ MissionState MissionState::load(const std::string& path) {
     m.last_error = root["last_error"].as<std::string>("");
     m.elapsed_s = root["elapsed_s"].as<double>(0.0);
     m.modelled_time_s = root["modelled_time_s"].as<double>(0.0);
+    m.modelled_scan_s = root["modelled_scan_s"].as<double>(0.0);
+    m.modelled_drive_s = root["modelled_drive_s"].as<double>(0.0);
+    m.modelled_compute_s = root["modelled_compute_s"].as<double>(0.0);
     m.last_map_pose = poseOf(root["last_map_pose"]);
     m.odom_at_last_scan = poseOf(root["odom_at_last_scan"]);
     m.odom_now = poseOf(root["odom_now"]);
@@ -159,6 +166,7 @@ MissionState MissionState::load(const std::string& path) {
       s.register_wall_s = n["register_wall_s"].as<double>(0.0);
       s.plan_wall_s = n["plan_wall_s"].as<double>(0.0);
       s.coverage = n["coverage"].as<double>(0.0);
+      s.mission_time_s = n["mission_time_s"].as<double>(0.0);
       if (!m.scans.empty() && s.index <= m.scans.back().index)
         throw std::runtime_error("scan indices must increase (" + std::to_string(s.index) + " after " +
                                  std::to_string(m.scans.back().index) + ")");

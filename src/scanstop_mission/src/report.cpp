@@ -102,6 +102,9 @@ Summary summarize(const MissionState& st) {
   s.complete_reason = st.complete_reason;
   s.elapsed_s = st.elapsed_s;
   s.modelled_time_s = st.modelled_time_s;
+  s.modelled_scan_s = st.modelled_scan_s;
+  s.modelled_drive_s = st.modelled_drive_s;
+  s.modelled_compute_s = st.modelled_compute_s;
   double compute_sum = 0.0, scan_sum = 0.0;
   for (const ScanRecord& r : st.scans) {
     const double c = r.register_wall_s + r.plan_wall_s;
@@ -161,6 +164,9 @@ std::string toJson(const Summary& s) {
       << "  \"coverage\": " << num(s.coverage) << ",\n"
       << "  \"true_coverage\": " << (s.has_true_coverage ? num(s.true_coverage) : "null") << ",\n"
       << "  \"true_reachable_floor_m2\": " << (s.has_true_coverage ? num(s.true_reachable_m2, 2) : "null") << ",\n"
+      << "  \"surface_coverage\": " << (s.has_surface_coverage ? num(s.surface_coverage) : "null") << ",\n"
+      << "  \"surface_visible_elements\": " << (s.has_surface_coverage ? std::to_string(s.surface_visible) : "null")
+      << ",\n"
       << "  \"collisions\": " << s.collisions << ",\n"
       << "  \"min_clearance_m\": " << (s.has_clearance ? num(s.min_clearance_m) : "null") << ",\n"
       << "  \"legs_measured\": " << (s.has_clearance ? std::to_string(s.clearance_legs) : "null") << ",\n"
@@ -185,6 +191,9 @@ std::string toJson(const Summary& s) {
       << "  \"compute_per_cycle_max_s\": " << num(s.compute_per_cycle_max_s) << ",\n"
       << "  \"scan_time_mean_s\": " << num(s.scan_time_mean_s) << ",\n"
       << "  \"modelled_time_s\": " << num(s.modelled_time_s, 1) << ",\n"
+      << "  \"modelled_scanning_s\": " << num(s.modelled_scan_s, 1) << ",\n"
+      << "  \"modelled_driving_s\": " << num(s.modelled_drive_s, 1) << ",\n"
+      << "  \"modelled_compute_s\": " << num(s.modelled_compute_s, 1) << ",\n"
       << "  \"elapsed_s\": " << num(s.elapsed_s, 1) << "\n"
       << "}\n";
   return out.str();
@@ -228,6 +237,9 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
     s.has_true_coverage = true;
     s.true_coverage = truth->coverage;
     s.true_reachable_m2 = truth->reachable_m2;
+    s.has_surface_coverage = truth->surface_coverage.has_value();
+    s.surface_coverage = truth->surface_coverage.value_or(0.0);
+    s.surface_visible = truth->surface_visible;
   }
   writeFileAtomic(run_dir + "/summary.json", toJson(s));
   writeFileAtomic(run_dir + "/trajectory.csv", trajectoryCsv(st));
@@ -329,6 +341,9 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   if (s.has_true_coverage)
     md << "| coverage of the truly reachable floor (" << num(s.true_reachable_m2, 1) << " m2, from the world) | "
        << num(s.true_coverage * 100.0, 1) << " % |\n";
+  if (s.has_surface_coverage)
+    md << "| surface held by the map within 3 cm (of " << s.surface_visible
+       << " 5 cm elements visible from the reachable floor) | " << num(s.surface_coverage * 100.0, 1) << " % |\n";
   md << "| collisions | " << s.collisions << " |\n"
      << (s.has_clearance ? "| smallest true clearance of the body (all motions) | " + num(s.min_clearance_m * 100.0, 1) +
                                 " cm; " + std::to_string(s.close_legs) + " of " + std::to_string(s.clearance_legs) +
@@ -350,7 +365,9 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   md << "| compute per cycle (register + plan) | mean " << num(s.compute_per_cycle_mean_s, 2) << " s, max "
      << num(s.compute_per_cycle_max_s, 2) << " s |\n"
      << "| modelled scan time | " << num(s.scan_time_mean_s, 1) << " s per scan |\n"
-     << "| modelled mission time | " << num(s.modelled_time_s / 60.0, 1) << " min |\n"
+     << "| modelled mission time | " << num(s.modelled_time_s / 60.0, 1) << " min: scanning "
+     << num(s.modelled_scan_s / 60.0, 1) << " min, driving " << num(s.modelled_drive_s / 60.0, 1) << " min, compute "
+     << num(s.modelled_compute_s / 60.0, 1) << " min |\n"
      << "| wall time | " << num(s.elapsed_s, 1) << " s |\n\n"
      << "## Coverage\n\n![coverage](" << coverage_png << ")\n\n"
      << "## Trajectory\n\n![trajectory](" << trajectory_png << ")\n\n";

@@ -4,6 +4,7 @@ are written, the pose error plot only with true poses, and a broken input (no ma
 line) ends it with exit status 1 naming the file, with nothing written or deleted.
 
 Run by run_tests_scanstop_mission (catkin_run_tests_target make_report); a few seconds."""
+import importlib.util
 import json
 import math
 import os
@@ -20,7 +21,7 @@ HEADER = ("index,file,stamp_s,map_x,map_y,map_yaw,odom_x,odom_y,odom_yaw,sensor_
 PNGS = ["report_coverage.png", "report_trajectory.png", "report_pose_error.png"]
 
 
-def make_run(root, truth=True, summary=True, floor=True):
+def make_run(root, truth=True, summary=True, floor=True, mission_times=False):
     """A run directory of 4 scans along a 4 x 3 m room; returns its path."""
     run = os.path.join(root, "run")
     os.makedirs(os.path.join(run, "map"))
@@ -35,6 +36,8 @@ def make_run(root, truth=True, summary=True, floor=True):
     for i, (x, y, yaw) in enumerate(poses):
         lines += ["  - index: %d" % i, "    map_pose: [%g, %g, %g]" % (x, y, yaw), "    scan_time_s: 40",
                   "    coverage: %g" % (0.3 + 0.2 * i)]
+        if mission_times:
+            lines.append("    mission_time_s: %g" % (60.0 + 90.0 * i))
         if truth:
             lines.append("    true_pose: [%g, %g, %g]" % (x + 0.01 * i, y - 0.02 * i, yaw + 0.002 * i))
     with open(os.path.join(run, "mission_state.yaml"), "w") as f:
@@ -42,7 +45,9 @@ def make_run(root, truth=True, summary=True, floor=True):
     if summary:
         with open(os.path.join(run, "summary.json"), "w") as f:
             json.dump({"world": "synthetic", "state": "DONE", "scans": 4, "coverage": 0.9,
-                       "true_coverage": 0.85 if truth else None, "collisions": 0, "modelled_time_s": 200.0}, f)
+                       "true_coverage": 0.85 if truth else None, "collisions": 0, "modelled_time_s": 420.0,
+                       "modelled_scanning_s": 160.0, "modelled_driving_s": 240.0, "modelled_compute_s": 20.0,
+                       "surface_coverage": 0.913 if truth else None}, f)
     if floor:
         import matplotlib
         matplotlib.use("Agg")
@@ -100,8 +105,23 @@ class MakeReport(unittest.TestCase):
         self.assertIn("synthetic", page)
         self.assertIn("85.0 %", page)  # the true coverage
         self.assertIn("SLAM position error (4 scans)", page)
+        self.assertIn("91.3 %", page)  # the surface held by the map
+        self.assertIn("2.7 min / 4.0 min / 0.3 min", page)  # scanning / driving / compute
         self.assertNotIn("no explorer/floor_map.yaml", page)
         self.assertEqual([n for n in os.listdir(run) if n.startswith(".tmp_")], [])
+
+    def test_coverage_against_the_missions_modelled_time_when_the_state_has_it(self):
+        spec = importlib.util.spec_from_file_location("make_report", SCRIPT)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        # With mission_time_s: the mission's clock (scanning, driving and compute) of each coverage.
+        run = module.Run(make_run(os.path.join(self.tmp, "a"), mission_times=True))
+        self.assertEqual(run.time_min, [1.0, 2.5, 4.0, 5.5])
+        # Without it (an older run): the map's stamps (41 s + 50 s per scan) from the start of the
+        # first scan (its stamp less its 40 s scan time).
+        run = module.Run(make_run(os.path.join(self.tmp, "b")))
+        for got, want in zip(run.time_min, [40.0, 90.0, 140.0, 190.0]):
+            self.assertAlmostEqual(got, want / 60.0)
 
     def test_robot_run_without_truth_has_no_error_plot(self):
         run = make_run(self.tmp, truth=False, floor=False)

@@ -127,6 +127,7 @@ class FakeSystem : public RobotSystem {
       return r;
     }
     r.success = true;
+    r.duration_s = 1.5;  // SLAM's compute
     r.converged = true;
     r.map_pose = slam_poses.back();
     r.scan_index = static_cast<uint32_t>(slam_poses.size() - 1);
@@ -177,6 +178,7 @@ class FakeSystem : public RobotSystem {
   PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
                       const std::vector<Contact>& contacts, const std::optional<Eigen::Vector2d>& goal) override {
     PlanResult r;
+    r.duration_s = 0.25;  // the explorer's compute
     plan_contacts.push_back(contacts);
     forwards_at_plan.push_back(forwards.size());
     if (always_fail_plan || plan_failures_left > 0) {
@@ -293,6 +295,19 @@ TEST(Mission, ExploresEveryTargetAndEndsComplete) {
   EXPECT_EQ(saved.scans.size(), 4u);
   EXPECT_EQ(saved.complete_reason, "no reachable cell borders unknown space");
   EXPECT_TRUE(std::ifstream(m.logPath()).good());
+  // The modelled time splits into scanning (4 scans of 50 planes at 0.1 s), driving (every motion)
+  // and compute (1.5 s per registration, 0.25 s per plan); each scan knows when its coverage was known.
+  double drive = 0.0;
+  for (const auto& [kind, amount] : sys.motions) drive += kind == 'r' ? std::abs(amount) : amount / 0.2;
+  EXPECT_NEAR(s.modelled_scan_s, 4 * 5.0, 1e-9);
+  EXPECT_NEAR(s.modelled_drive_s, drive, 1e-9);
+  EXPECT_GT(s.modelled_drive_s, 0.0);
+  EXPECT_NEAR(s.modelled_compute_s, 4 * 1.5 + s.plans * 0.25, 1e-9);
+  EXPECT_NEAR(s.modelled_time_s, s.modelled_scan_s + s.modelled_drive_s + s.modelled_compute_s, 1e-9);
+  for (size_t i = 1; i < s.scans.size(); ++i) EXPECT_GT(s.scans[i].mission_time_s, s.scans[i - 1].mission_time_s);
+  EXPECT_NEAR(s.scans.back().mission_time_s, s.modelled_time_s, 1e-9);  // the last plan follows the last scan
+  EXPECT_NEAR(saved.modelled_compute_s, s.modelled_compute_s, 1e-9);
+  EXPECT_NEAR(saved.scans[2].mission_time_s, s.scans[2].mission_time_s, 1e-9);
 }
 
 TEST(Mission, TheFinalStateHoldsSlamsPosesAsFinallyOptimizedAndTheRegisteredOnes) {

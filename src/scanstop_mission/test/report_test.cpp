@@ -37,6 +37,10 @@ MissionState twoScans() {
   b.plan_wall_s = 0.3;
   b.converged = false;
   st.scans = {a, b};
+  st.modelled_scan_s = 80.0;
+  st.modelled_drive_s = 20.0;
+  st.modelled_compute_s = 3.0;
+  st.modelled_time_s = 103.0;
   return st;
 }
 
@@ -114,6 +118,11 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   EXPECT_NE(json.find("\"final_slam_error_m\": 0.0300"), std::string::npos) << json;
   EXPECT_NE(json.find("\"final_odometry_error_m\": 0.5000"), std::string::npos) << json;
   EXPECT_NE(json.find("\"complete\": true"), std::string::npos);
+  // The modelled time and its split (twoScans: 80 s scanning, 20 s driving, 3 s compute).
+  EXPECT_NE(json.find("\"modelled_time_s\": 103.0"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"modelled_scanning_s\": 80.0"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"modelled_driving_s\": 20.0"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"modelled_compute_s\": 3.0"), std::string::npos) << json;
   for (const char* png : {"/coverage.png", "/trajectory.png", "/pose_error.png"}) {
     const cv::Mat img = cv::imread(dir + png);
     ASSERT_FALSE(img.empty()) << png;
@@ -132,8 +141,14 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   EXPECT_NE(json.find("\"true_coverage\": null"), std::string::npos) << json;
   EXPECT_EQ(text.find("truly reachable"), std::string::npos) << text;
   // In simulation the ground-truth coverage is reported next to the explorer's own figure.
-  writeReport(twoScans(), dir, {}, TrueCoverage{0.816, 96.0});
+  writeReport(twoScans(), dir, {}, TrueCoverage{0.816, 96.0, 0.9234, 20299});
   const std::string sim_json = readFile(dir + "/summary.json");
+  EXPECT_NE(sim_json.find("\"surface_coverage\": 0.9234"), std::string::npos) << sim_json;
+  EXPECT_NE(sim_json.find("\"surface_visible_elements\": 20299"), std::string::npos) << sim_json;
+  EXPECT_NE(readFile(dir + "/report.md").find("(of 20299 5 cm elements visible from the reachable floor) | 92.3 % |"),
+            std::string::npos)
+      << readFile(dir + "/report.md");
+  EXPECT_NE(json.find("\"surface_coverage\": null"), std::string::npos) << json;
   EXPECT_NE(sim_json.find("\"true_coverage\": 0.8160"), std::string::npos) << sim_json;
   EXPECT_NE(sim_json.find("\"true_reachable_floor_m2\": 96.00"), std::string::npos) << sim_json;
   EXPECT_NE(readFile(dir + "/report.md").find("| coverage of the truly reachable floor (96.0 m2, from the world) | 81.6 % |"),

@@ -15,6 +15,7 @@
 
 #include "scanstop_common/pose.h"
 #include "scanstop_eval/set_cover.h"
+#include "scanstop_eval/surface_elements.h"
 #include "scanstop_sim/simulator.h"
 
 namespace scanstop {
@@ -78,6 +79,22 @@ struct OracleResult {
 /// settings, std::length_error for a world too large for the grids.
 OracleResult runCoverageOracle(sim::Simulator& sim, const Pose2D& start, const OracleConfig& config,
                                const std::function<void(size_t, size_t)>& progress = {});
+
+/// The world's surface elements and which of them are visible from the truly reachable floor: seen
+/// by the scan of some candidate of the oracle's lattice (the denominator of a map's surface coverage).
+struct VisibleSurface {
+  SurfaceElements elements;          ///< every element of the world's surface (not floor)
+  std::vector<uint8_t> visible;      ///< per element: 1 when some candidate's scan saw it
+  size_t visible_count = 0;          ///< elements with visible = 1
+  size_t candidates = 0;             ///< candidates scanned
+  size_t candidates_refused = 0;     ///< lattice points the simulator refused
+  double seconds = 0.0;              ///< wall time [s]
+};
+
+/// The oracle's candidates and their scans, without the set cover: the visible surface (the same
+/// definition as OracleResult::surface_visible, for the same settings). Throws as runCoverageOracle.
+VisibleSurface visibleSurface(sim::Simulator& sim, const Pose2D& start, const OracleConfig& config,
+                              const std::function<void(size_t, size_t)>& progress = {});
 
 }  // namespace eval
 }  // namespace scanstop

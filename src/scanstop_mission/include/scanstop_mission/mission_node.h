@@ -14,6 +14,8 @@
 #include <string>
 #include <thread>
 
+#include "scanstop_common/cloud.h"
+#include "scanstop_common/map_dir.h"
 #include "scanstop_common/pose.h"
 #include "scanstop_mission/mission.h"
 #include "scanstop_mission/report.h"
@@ -48,6 +50,9 @@ class MissionNode {
   void onStaticTf(const tf2_msgs::TFMessage::ConstPtr& msg);
   /// The ground-truth coverage of the final map when world_file is set (simulation), else none.
   std::optional<TrueCoverage> trueCoverage();
+  /// Adds the surface coverage of the map to truth (simulation; a failure is a warning).
+  void surfaceCoverage(const TriangleMesh& world, const Pose2D& start, const MapDirectory& map, double robot_radius,
+                       TrueCoverage& truth);
 
   ros::NodeHandle nh_;
   MissionConfig config_;
@@ -69,6 +74,7 @@ class MissionNode {
   double robot_radius_m_ = 0.3;
   bool robot_radius_given_ = false;  ///< ~robot_radius set; otherwise the explorer's robot_radius_m
   std::string explorer_ns_ = "explorer_node";  ///< where the explorer's parameters are (true coverage)
+  int surface_planes_ = 100;         ///< planes of the visible surface's candidate scans; 0: no surface coverage
   ros::Subscriber static_tf_sub_;
   std::mutex start_mutex_;
   std::optional<Pose2D> world_T_map_;

@@ -34,6 +34,8 @@ struct ScanRecord {
   double register_wall_s = 0.0;          ///< registration compute time [s]
   double plan_wall_s = 0.0;              ///< planning compute time of the cycle that led here [s]
   double coverage = 0.0;                 ///< coverage reported by the plan after this scan
+  /// Modelled mission time when that coverage was known (after the plan that followed the scan) [s].
+  double mission_time_s = 0.0;
 };
 
 /// One event worth keeping (collisions, failures, replans).
@@ -61,6 +63,11 @@ struct MissionState {
   std::string last_error;
   double elapsed_s = 0.0;                    ///< wall time spent in the mission so far [s]
   double modelled_time_s = 0.0;              ///< sum of the steps' modelled durations [s]
+  // modelled_time_s split: scanning, driving (every motion) and compute (registration and planning,
+  // as the serving nodes measured them).
+  double modelled_scan_s = 0.0;
+  double modelled_drive_s = 0.0;
+  double modelled_compute_s = 0.0;
   std::string world;                         ///< world name (simulation) for the report
   // The pose estimate: map pose = last_map_pose * odom_at_last_scan^-1 * odom_now.
   Pose2D last_map_pose;                      ///< corrected pose of the last registered scan (map)

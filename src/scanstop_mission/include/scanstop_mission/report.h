@@ -46,6 +46,9 @@ struct Summary {
   double scan_time_mean_s = 0.0;       ///< modelled scan duration [s]
   double elapsed_s = 0.0;              ///< wall time of the mission [s]
   double modelled_time_s = 0.0;        ///< time the steps would take on the robot [s]
+  double modelled_scan_s = 0.0;        ///< ... of it scanning [s]
+  double modelled_drive_s = 0.0;       ///< ... driving [s]
+  double modelled_compute_s = 0.0;     ///< ... registering and planning [s]
   int unconverged_registrations = 0;
   /// In simulation: the share of the world's truly reachable floor (from the world mesh) that the
   /// map observed. `coverage` is the explorer's own figure, counted on the floor it can reach in its
@@ -53,12 +56,20 @@ struct Summary {
   bool has_true_coverage = false;
   double true_coverage = 0.0;          ///< [0..1]
   double true_reachable_m2 = 0.0;      ///< the truly reachable floor [m^2]
+  /// In simulation: the share of the world's surface visible from the truly reachable floor
+  /// (eval::visibleSurface) that the map holds within 3 cm (eval::mapSurfaceCoverage).
+  bool has_surface_coverage = false;
+  double surface_coverage = 0.0;       ///< [0..1]
+  size_t surface_visible = 0;          ///< visible surface elements (5 cm)
 };
 
 /// Ground-truth coverage of a simulated run (explorer::groundTruthCoverage on the final map).
 struct TrueCoverage {
   double coverage = 0.0;      ///< observed / reachable [0..1]
   double reachable_m2 = 0.0;  ///< [m^2]
+  /// The visible surface held by the map [0..1] and the visible elements; nullopt: not measured.
+  std::optional<double> surface_coverage;
+  size_t surface_visible = 0;
 };
 
 /// Computes the summary of a mission state.
