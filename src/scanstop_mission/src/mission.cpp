@@ -830,10 +830,17 @@ State Mission::run() {
           state_.complete_reason = safety_stop;
           break;
         }
-        event("target (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) +
-                  ") marked unreachable; scanning here to re-localize, then replanning",
+        // A scan where the last one was taken sees nothing new: re-localize after a contact (the
+        // wheels may have slipped) or after driving or turning as far as a re-localization needs,
+        // not otherwise (a robot stuck before its first leg scanned once per target it gave up:
+        // 44 scans in one spot of the house, seed 2).
+        const bool moved = collision || dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m ||
+                           dead_reckoning_.turnedRad() >= config_.relocalize_min_turn_rad;
+        event("target (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + ") marked unreachable; " +
+                  (moved ? "scanning here to re-localize, then replanning"
+                         : "replanning without a new scan (" + deadReckoningText() + ")"),
               true);
-        if (!scanAndRegister() && !checkControl()) return finish(State::Aborted, "aborted by the user");
+        if (moved && !scanAndRegister() && !checkControl()) return finish(State::Aborted, "aborted by the user");
         replan = true;
         break;
       }
