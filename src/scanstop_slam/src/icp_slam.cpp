@@ -30,6 +30,8 @@ void SlamConfig::validate() const {
   requireInRange("prior_sigma_angle_per_rad", prior_sigma_rad_per_rad, 0.0, 1.0);
   requireInRange("prior_sigma_angle_per_m", prior_sigma_rad_per_m, 0.0, 1.0, "rad/m");
   requireInRange("prior_gate", prior_gate, 1e-6, 1e6);
+  requireInRange("odometry_gate", odometry_gate, 0.0, 1e6);
+  requireInRange("odometry_gate_rms_ratio", odometry_gate_rms_ratio, 1.0, 100.0);
   requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
   requireInRange("max_odom_jump", max_odom_jump_m, 0.01, 100000.0, "m");
   requireInRange("relax_neighbours", relax_neighbours, 0, 100);
@@ -159,10 +161,10 @@ Eigen::MatrixXd IcpSlam::priorInformation(const Pose2D& odom_leg) const {
 
 IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source,
                                   const Eigen::Isometry3d& start, const Eigen::Vector3f& origin, Registration* r,
-                                  const Eigen::MatrixXd* prior_information) const {
+                                  const Eigen::MatrixXd* prior_information, bool coarse_stage) const {
   Eigen::Isometry3d from = start;
   int coarse_iterations = 0;
-  if (config_.coarse_c_max_m > config_.icp.c_max_m) {
+  if (coarse_stage && config_.coarse_c_max_m > config_.icp.c_max_m) {
     // The coarse stage only moves the start; its own checks use the coarse distance.
     IcpConfig coarse = config_.icp;
     coarse.c_max_m = config_.coarse_c_max_m;
@@ -222,20 +224,33 @@ void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, 
   const std::vector<Eigen::Vector3f> source = sample(scan_base.points, config_.source_voxel_m);
   const Eigen::Isometry3d start = r.guess.toIsometry3d();
   const Eigen::MatrixXd prior_information = priorInformation(r.odom_leg);
-  IcpResult icp_result = registerStages(target, source, start, origin, &r, config_.odometry_prior ? &prior_information : nullptr);
+  const Eigen::MatrixXd* prior = config_.odometry_prior ? &prior_information : nullptr;
+  IcpResult icp_result = registerStages(target, source, start, origin, &r, prior);
   if (config_.odometry_prior && icp_result.converged) {
-    const Pose2D offset = r.guess.between(Pose2D::fromIsometry3d(icp_result.T_target_source));
-    const Eigen::Vector3d d(offset.x, offset.y, offset.yaw);
-    // x, y, yaw of the prior's information (6dof: rows and columns 0, 1, 5 of x, y, z, roll, pitch, yaw).
-    const int k[3] = {0, 1, config_.icp.six_dof ? 5 : 2};
-    Eigen::Matrix3d info;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) info(i, j) = prior_information(k[i], k[j]);
-    r.prior_distance = std::sqrt(d.dot(info * d));
+    r.prior_distance = guessDistance(r.guess, Pose2D::fromIsometry3d(icp_result.T_target_source), prior_information);
     // Only where the prior had a say (some stage had weak directions); elsewhere a second run is the same.
     if (r.prior_distance > config_.prior_gate && icp_result.remapped) {
       r.prior_rejected = true;
       icp_result = registerStages(target, source, start, origin, &r, nullptr);
+      prior = nullptr;
+    }
+  }
+  if (config_.odometry_gate > 0.0 && icp_result.converged) {
+    r.guess_distance = guessDistance(r.guess, Pose2D::fromIsometry3d(icp_result.T_target_source), prior_information);
+    if (r.guess_distance > config_.odometry_gate) {
+      r.gate_retried = true;
+      Registration second = r;
+      const IcpResult retry = registerStages(target, source, start, origin, &second, prior, false);
+      if (retry.converged && retry.rms_m <= config_.odometry_gate_rms_ratio * icp_result.rms_m &&
+          guessDistance(r.guess, Pose2D::fromIsometry3d(retry.T_target_source), prior_information) <=
+              config_.odometry_gate) {
+        const double first_distance = r.guess_distance;
+        r = second;
+        r.gate_retried = true;
+        r.gate_replaced = true;
+        r.guess_distance = first_distance;
+        icp_result = retry;
+      }
     }
   }
   r.weak_gain_m = icp_result.weak_gain_m;
@@ -251,6 +266,17 @@ void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, 
   r.weak_direction = icp_result.weak_direction;
   r.remapped = icp_result.remapped;
   r.map_pose = r.converged ? Pose2D::fromIsometry3d(icp_result.T_target_source) : r.guess;
+}
+
+double IcpSlam::guessDistance(const Pose2D& guess, const Pose2D& result, const Eigen::MatrixXd& prior_information) const {
+  const Pose2D offset = guess.between(result);
+  const Eigen::Vector3d d(offset.x, offset.y, offset.yaw);
+  // x, y, yaw of the prior's information (6dof: rows and columns 0, 1, 5 of x, y, z, roll, pitch, yaw).
+  const int k[3] = {0, 1, config_.icp.six_dof ? 5 : 2};
+  Eigen::Matrix3d info;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) info(i, j) = prior_information(k[i], k[j]);
+  return std::sqrt(d.dot(info * d));
 }
 
 Registration IcpSlam::registerAgainst(const VoxelMap& target, const PointCloud& scan_base, const Pose2D& guess,

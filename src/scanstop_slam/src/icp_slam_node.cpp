@@ -58,6 +58,8 @@ class IcpSlamNode {
     config.prior_sigma_rad = prior_sigma_deg * M_PI / 180.0;
     optional("prior_sigma_angle_per_rad", config.prior_sigma_rad_per_rad);
     optional("prior_gate", config.prior_gate);
+    optional("odometry_gate", config.odometry_gate);
+    optional("odometry_gate_rms_ratio", config.odometry_gate_rms_ratio);
     double prior_sigma_deg_per_m = config.prior_sigma_rad_per_m * 180.0 / M_PI;
     optional("prior_sigma_deg_per_m", prior_sigma_deg_per_m);
     requireInRange(pnh.resolveName("prior_sigma_deg_per_m"), prior_sigma_deg_per_m, 0.0, 57.0, "deg/m");
@@ -287,6 +289,11 @@ class IcpSlamNode {
       ROS_WARN("icp_slam_node: scan %u: weighed against the odometry prior the registration ended %.1f sigma from "
                "it (beyond prior_gate %.1f): registered again keeping the guess along weak directions",
                r.index, r.prior_distance, slam_->config().prior_gate);
+    if (r.gate_retried)
+      ROS_WARN("icp_slam_node: scan %u: the registration ended %.1f sigma from the odometry guess (beyond "
+               "odometry_gate %.1f): registered again without the coarse stage; %s",
+               r.index, r.guess_distance, slam_->config().odometry_gate,
+               r.gate_replaced ? "that result stands" : "it did not land within the gate as well: the first stands");
     if (r.refine_rejected)
       ROS_WARN("icp_slam_node: scan %u: the refinement stage moved the pose %.1f cm, %.2f deg (beyond "
                "refine_max_correction %.1f cm, %.2f deg): kept the thesis stage's result",

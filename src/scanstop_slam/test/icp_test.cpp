@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "scanstop_common/cloud_io.h"
+#include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/shared_data.h"
 #include "scanstop_slam/icp_slam.h"
@@ -1320,6 +1321,56 @@ TEST(VoxelCentroids, OnePointPerVoxelAtTheMeanOfItsPoints) {
   EXPECT_EQ(f[0], pts[0]);
 }
 
+
+TEST(IcpSlam, TheOdometryGateLeavesRegistrationsWithinItAndKeepsACorrectionFarBeyondIt) {
+  // A room seen from 0.5 m further east, and a wall east of the mapped room that only the second
+  // scan sees. Odometry 2 cm off over a 0.5 m leg (about 1.6 sigma of the error model): within a
+  // 3 sigma gate nothing changes. Odometry 25 cm off (a slip; 18 sigma): the registration is tried
+  // again from the guess without the coarse stage, that lands no nearer the guess than the gate,
+  // and the first registration's correction stands.
+  std::mt19937 rng(29);
+  const std::vector<Eigen::Vector3f> room = roomPoints(rng, 60000);
+  std::vector<Eigen::Vector3f> wider = room;
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 30000; ++i) wider.emplace_back(3.6f, 5 * u(rng) - 2.5f, 2.5f * u(rng));
+  const Pose2D truth(0.5, 0.0, 0.0);
+  const auto second = [&](double gate, const Pose2D& odom) {
+    SlamConfig config;
+    config.odometry_gate = gate;
+    IcpSlam slam(config);
+    PointCloud a, b;
+    a.points = room;
+    a.setUnorganized();
+    b.points = transformed(wider, truth.toIsometry3d().inverse());
+    b.setUnorganized();
+    slam.registerScan(a, Pose2D(), Eigen::Vector3d(0, 0, 0.45));
+    return slam.registerScan(b, odom, Eigen::Vector3d(0, 0, 0.45));
+  };
+  const Pose2D near_odom(0.52, 0.01, 0.005), slipped(0.75, 0.05, 0.02);
+  const Registration off = second(0.0, near_odom), within = second(3.0, near_odom);
+  ASSERT_TRUE(off.converged && within.converged) << off.failure << within.failure;
+  EXPECT_EQ(off.guess_distance, 0.0);
+  EXPECT_FALSE(off.gate_retried);
+  EXPECT_GT(within.guess_distance, 0.5);
+  EXPECT_LT(within.guess_distance, 3.0);
+  EXPECT_FALSE(within.gate_retried);
+  EXPECT_EQ(within.map_pose.x, off.map_pose.x);
+  EXPECT_EQ(within.map_pose.y, off.map_pose.y);
+  EXPECT_EQ(within.map_pose.yaw, off.map_pose.yaw);
+  const Registration slip = second(3.0, slipped);
+  ASSERT_TRUE(slip.converged) << slip.failure;
+  EXPECT_GT(slip.guess_distance, 10.0);
+  EXPECT_TRUE(slip.gate_retried);
+  EXPECT_FALSE(slip.gate_replaced);
+  EXPECT_LT(std::hypot(slip.map_pose.x - truth.x, slip.map_pose.y - truth.y), 0.005);
+  // Bad settings are named.
+  SlamConfig bad;
+  bad.odometry_gate = -1.0;
+  EXPECT_THROW(IcpSlam{bad}, scanstop::ConfigError);
+  bad = SlamConfig();
+  bad.odometry_gate_rms_ratio = 0.5;
+  EXPECT_THROW(IcpSlam{bad}, scanstop::ConfigError);
+}
 
 }  // namespace
 }  // namespace slam
