@@ -786,6 +786,7 @@ State Mission::run() {
 
     // Drive the path, scanning where the plan says.
     const size_t scans_before = snapshot().scans.size();
+    const size_t unreachable_before = snapshot().unreachable.size();
     bool replan = false;
     double travel = 0.0;  // planned path length since the last scan [m]
     const double scan_travel = homeward(snapshot()) ? std::max(config_.min_scan_travel_m, config_.home_scan_travel_m)
@@ -869,7 +870,11 @@ State Mission::run() {
     setPath(plan.waypoints.size(), -1);
     save();
     if (!safety_stop.empty()) break;
-    failed_cycles = snapshot().scans.size() > scans_before ? 0 : failed_cycles + 1;
+    // Progress: a new scan, or a target given up where the last scan was taken (the next plan knows
+    // one more unreachable target; the targets are finite, and max_cycles bounds them).
+    const MissionState after = snapshot();
+    failed_cycles =
+        after.scans.size() > scans_before || after.unreachable.size() > unreachable_before ? 0 : failed_cycles + 1;
   }
 
   const MissionState end = snapshot();
