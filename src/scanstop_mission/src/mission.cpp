@@ -58,6 +58,7 @@ void MissionConfig::validate() const {
   requireInRange("leg_check_distance_error", leg_check_distance_error, 0.0, 0.5);
   requireInRange("relocalize_min_travel", relocalize_min_travel_m, 0.0, 100.0, "m");
   requireInRange("relocalize_min_turn", relocalize_min_turn_rad, 0.0, 2 * M_PI, "rad");
+  requireInRange("leg_sidestep", leg_sidestep_m, 0.0, 1.0, "m");
   requireInRange("retry_backoff", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
   requireInRange("max_cycles", max_cycles, 1, 1000000);
@@ -415,6 +416,7 @@ std::string Mission::deadReckoningText() const {
 }
 
 Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<double> clearance_m) {
+  int sidesteps = 0;
   for (int guard = 0; guard < 100; ++guard) {
     if (!checkControl()) return Drive::Failed;
     const Pose2D est = snapshot().estimate();
@@ -455,6 +457,44 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
                               dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m;
       std::string what = "leg check: the latest scan shows an obstruction " + fmt(free) + " m ahead on the " +
                          fmt(step) + " m leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")";
+      // Refused before it starts: a short sidestep may clear the whole leg (a jamb it grazes).
+      if (!relocalize && allowed < 0.05 && config_.leg_sidestep_m > 0.0 && sidesteps == 0) {
+        const Pose2D here = snapshot().estimate();
+        if (const std::optional<Eigen::Vector2d> o = sidestep(here.inverse().transformPoint(waypoint), step)) {
+          ++sidesteps;
+          const bool backwards = o->x() < -1e-9;
+          const double turn = backwards ? normalizeAngle(std::atan2(-o->y(), -o->x())) : std::atan2(o->y(), o->x());
+          const double d = o->norm();
+          event(what + "; sidestepping " + fmt(d) + " m " + (backwards ? "backwards " : "") + "at " +
+                    fmt(std::atan2(o->y(), o->x()) * 180.0 / M_PI, 0) + " deg to the heading, from where it is clear",
+                true);
+          if (std::abs(turn) > 1e-6) {
+            const MotionResult rr = robot_.rotate(turn);
+            noteMotion(rr, false);
+            if (!rr.success || rr.collision) {
+              event("rotation by " + fmt(turn * 180.0 / M_PI, 1) + " deg failed: " + rr.message, true);
+              if (!rr.collision) return Drive::Failed;
+              escapeContact(0, "rotation");
+              return Drive::Collision;
+            }
+          }
+          const double signed_d = backwards ? -d : d;
+          const MotionResult r = robot_.forward(signed_d);
+          noteMotion(r, true);
+          if (r.collision) {
+            event("collision after " + fmt(std::abs(r.achieved)) + " of " + fmt(d) + " m: " + r.message, true);
+            escapeContact(backwards ? -1 : 1, backwards ? "backward motion" : "forward motion");
+            return Drive::Collision;
+          }
+          if (!r.success) {
+            event("sidestep of " + fmt(d) + " m failed: " + r.message, true);
+            return Drive::Failed;
+          }
+          save();
+          continue;  // turn to the waypoint; the leg is checked again from here
+        }
+        what += "; no sidestep of up to " + fmt(config_.leg_sidestep_m) + " m clears it";
+      }
       if (relocalize)
         what += " within what odometry cannot see (" + deadReckoningText() + ")";
       what += allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it";
@@ -500,22 +540,22 @@ double Mission::boundAfter(const Eigen::Vector2d& next) const {
   return after.positionBoundM();
 }
 
-double Mission::freeTravel(bool dead_reckoning) const {
+double Mission::freeTravel(const DeadReckoning* bounds, const Pose2D& from) const {
   if (!config_.leg_check || obstacles_.empty()) return std::numeric_limits<double>::infinity();
   Pose2D odom_now;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     odom_now = state_.odom_now;
   }
-  // From the scan's base_link to the present one, by odometry.
-  const Pose2D T = odom_now.inverse() * obstacles_odom_;
+  // From the scan's base_link to the present one by odometry, then to the leg's start.
+  const Pose2D T = from.inverse() * (odom_now.inverse() * obstacles_odom_);
   const double r = config_.leg_check_radius_m, r2 = r * r;
   std::vector<double> hits;  // where along the leg the disc first touches each point ahead
   for (const Eigen::Vector2d& q : obstacles_) {
     const Eigen::Vector2d p = T.transformPoint(q);
     if (p.squaredNorm() < r2) continue;  // under the body now
     // The disc that holds the true body there, given what odometry cannot see since the scan.
-    const double re = dead_reckoning ? dead_reckoning_.widenedRadius(r, p.x()) : r;
+    const double re = bounds ? bounds->widenedRadius(r, p.x()) : r;
     if (std::abs(p.y()) >= re) continue;  // beside the way
     const double s = p.x() - std::sqrt(re * re - p.y() * p.y());
     if (s >= 0.0) hits.push_back(s);
@@ -524,6 +564,63 @@ double Mission::freeTravel(bool dead_reckoning) const {
   if (hits.size() < k) return std::numeric_limits<double>::infinity();
   std::nth_element(hits.begin(), hits.begin() + (k - 1), hits.end());
   return hits[k - 1];
+}
+
+double Mission::distanceFromSegment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  if (obstacles_.empty()) return std::numeric_limits<double>::infinity();
+  Pose2D odom_now;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    odom_now = state_.odom_now;
+  }
+  const Pose2D T = odom_now.inverse() * obstacles_odom_;
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  std::vector<double> d;
+  d.reserve(obstacles_.size());
+  for (const Eigen::Vector2d& q : obstacles_) {
+    const Eigen::Vector2d p = T.transformPoint(q);
+    const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    d.push_back((a + t * ab - p).norm());
+  }
+  const size_t k = std::min(d.size(), static_cast<size_t>(config_.leg_check_min_points));
+  std::nth_element(d.begin(), d.begin() + (k - 1), d.end());
+  return d[k - 1];
+}
+
+std::optional<Eigen::Vector2d> Mission::sidestep(const Eigen::Vector2d& waypoint, double step) const {
+  const double margin = config_.leg_check_margin_m;
+  const int directions = 16;
+  // The sidestep never takes the body closer to what the scan shows than it stands now (it stands
+  // close: the leg from here grazes something).
+  const double standing = distanceFromSegment(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
+  for (double d = 0.05; d <= config_.leg_sidestep_m + 1e-9; d += 0.05) {
+    std::optional<Eigen::Vector2d> best;
+    double best_progress = -std::numeric_limits<double>::infinity();
+    for (int k = 0; k < directions; ++k) {
+      const double a = normalizeAngle(2.0 * M_PI * k / directions);
+      const Eigen::Vector2d o(d * std::cos(a), d * std::sin(a));
+      // What odometry cannot see grows by the sidestep's turn, its way and the turn to the leg.
+      const bool backwards = o.x() < -1e-9;
+      const double facing = backwards ? normalizeAngle(a + M_PI) : a;
+      DeadReckoning bounds = dead_reckoning_;
+      bounds.add(Pose2D(0.0, 0.0, facing));
+      if (freeTravel(&bounds, Pose2D(0.0, 0.0, a)) - margin < d) continue;  // the sidestep itself
+      if (distanceFromSegment(Eigen::Vector2d::Zero(), o) < standing - 0.005) continue;
+      bounds.add(Pose2D(d, 0.0, 0.0));
+      const Eigen::Vector2d rest = waypoint - o;
+      const double leg = std::min(rest.norm(), step), heading = std::atan2(rest.y(), rest.x());
+      bounds.add(Pose2D(0.0, 0.0, normalizeAngle(heading - facing)));
+      if (leg > 1e-6 && freeTravel(&bounds, Pose2D(o.x(), o.y(), heading)) - margin < leg) continue;  // the leg
+      const double progress = o.dot(waypoint.normalized());  // the least detour first
+      if (progress > best_progress) {
+        best_progress = progress;
+        best = o;
+      }
+    }
+    if (best) return best;
+  }
+  return std::nullopt;
 }
 
 void Mission::noteMotion(const MotionResult& r, bool leg) {

@@ -73,6 +73,7 @@ class FakeSystem : public RobotSystem {
   double max_forward = 0.0;
   std::vector<double> forwards;                   // every forward distance asked for, in order
   std::vector<std::pair<char, double>> motions;   // every motion: ('r', angle) or ('f', distance)
+  std::vector<Eigen::Vector2d> trail;             // the true position after every forward motion
   long first_collision = -1;                      // index into motions of the first colliding one
   /// The true clearance a motion reports (simulation), by kind ('r', 'f') and command; unset: none.
   std::function<std::optional<double>(char, double)> clearance_of;
@@ -165,6 +166,7 @@ class FakeSystem : public RobotSystem {
       }
     }
     truth = truth * Pose2D(d, 0, 0);
+    trail.emplace_back(truth.x, truth.y);
     odom = odom * Pose2D(d * 1.03, 0, d * M_PI / 180.0);
     r.success = !r.collision;
     r.message = r.collision ? "bumped into a wall" : "";
@@ -747,6 +749,55 @@ TEST(Mission, TargetsGivenUpWhereTheLastScanWasTakenAreReplannedWithoutAScan) {
   EXPECT_EQ(without, 3) << events;
   EXPECT_EQ(s.scans.size(), 2u) << events;
   EXPECT_DOUBLE_EQ(sys.max_forward, 0.0);  // it never drove into the gap
+}
+
+TEST(Mission, ALegRefusedBeforeItStartsIsDrivenAfterASidestepThatClearsIt) {
+  // The robot stands 0.20 m before the end of a jamb 0.25 m left of its way: the body (leg check
+  // disc 0.28 m) would touch it after 7 cm, so the leg to (2, 0) is refused before it starts. A
+  // sidestep to the right clears the whole leg: the target is reached, and the body's centre never
+  // comes within the body's radius (0.26 m) of the jamb. With leg_sidestep 0 the target is given up.
+  const Eigen::Vector2d jamb(0.2, 0.25);
+  const auto run = [&](double sidestep, FakeSystem& sys) {
+    TempDir dir;
+    sys.walls = {{jamb, {0.2, 2.0}}};
+    sys.targets = {{2.0, 0.0}};
+    sys.scan_walls = true;
+    MissionConfig c = config(dir.path());
+    c.leg_sidestep_m = sidestep;
+    Mission m(c, sys, quiet, quiet);
+    EXPECT_EQ(m.run(), State::Done);
+    return m.snapshot();
+  };
+  FakeSystem sys;
+  const MissionState s = run(0.25, sys);
+  std::string events;
+  int sidesteps = 0;
+  for (const auto& e : s.events) {
+    events += e.what + "\n";
+    sidesteps += e.what.find("sidestepping") != std::string::npos;
+  }
+  EXPECT_EQ(sidesteps, 1) << events;
+  EXPECT_TRUE(s.unreachable.empty()) << events;
+  EXPECT_EQ(s.collisions, 0);
+  ASSERT_FALSE(sys.trail.empty());
+  EXPECT_NEAR(sys.trail.back().x(), 2.0, 0.1) << events;
+  EXPECT_NEAR(sys.trail.back().y(), 0.0, 0.1) << events;
+  // The sidestep: the first forward motion, at most leg_sidestep, to the right (away from the jamb).
+  ASSERT_GE(sys.forwards.size(), 2u);
+  EXPECT_LE(std::abs(sys.forwards.front()), 0.25 + 1e-9);
+  EXPECT_LT(sys.trail.front().y(), -0.01);
+  Eigen::Vector2d from(0.0, 0.0);
+  for (const Eigen::Vector2d& to : sys.trail) {  // the body's centre keeps its radius from the jamb
+    const Eigen::Vector2d d = to - from;
+    const double t = d.squaredNorm() > 0.0 ? std::clamp((jamb - from).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    EXPECT_GT((from + t * d - jamb).norm(), 0.26) << "leg to (" << to.x() << ", " << to.y() << ")";
+    from = to;
+  }
+  // Off: the target is given up without a motion.
+  FakeSystem off;
+  const MissionState o = run(0.0, off);
+  ASSERT_EQ(o.unreachable.size(), 1u);
+  EXPECT_DOUBLE_EQ(off.max_forward, 0.0);
 }
 
 TEST(Mission, TheContactIsTheScannedPointTheBodyTouchedNotAlwaysStraightAhead) {

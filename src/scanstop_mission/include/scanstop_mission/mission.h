@@ -98,6 +98,14 @@ struct MissionConfig {
   /// got wrong: furnished_3 seed 4 drove back out of a 0.6 m niche after a 175 deg turn and passed
   /// 0.0 cm from a shelf). [rad], [0, 2 pi]; 2 pi: off
   double relocalize_min_turn_rad = M_PI / 2;
+  /// A leg the check refuses before the robot moves (an obstruction within leg_check_margin_m of
+  /// the body ahead, e.g. a door jamb the leg grazes from where the robot stopped): the robot first
+  /// looks for a sidestep of at most this much (0.05 m steps, 16 directions) after which the whole
+  /// leg to the same waypoint is clear by the same check, and drives it (backwards when it lies
+  /// behind) instead of giving the target up. The house, seed 2: the robot stood 9 cm off in
+  /// front of a door and gave up 40 targets behind it one by one. At most one sidestep per
+  /// waypoint. [m], [0, 1]; 0 = off.
+  double leg_sidestep_m = 0.25;
   /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
   static constexpr double kCloseLeg = 0.05;
   int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
@@ -188,7 +196,17 @@ class Mission {
   /// How far the body can drive straight ahead from the present pose before the latest scan's band
   /// points obstruct it (leg_check); +inf without a scan to check against.
   /// With `dead_reckoning` false, the plain disc (as if odometry were exact since the scan).
-  double freeTravel(bool dead_reckoning = true) const;
+  double freeTravel(bool dead_reckoning = true) const { return freeTravel(dead_reckoning ? &dead_reckoning_ : nullptr); }
+  /// ... for a leg from `from` (a pose in the present base_link) along its x axis, with what
+  /// odometry cannot see by `bounds` (nullptr: the plain disc).
+  double freeTravel(const DeadReckoning* bounds, const Pose2D& from = Pose2D()) const;
+  /// The shortest sidestep (leg_sidestep_m) from the present pose after which the leg to `waypoint`
+  /// (present base_link) is clear for `step` metres by the leg check: the offset in the present
+  /// base_link, or nullopt.
+  std::optional<Eigen::Vector2d> sidestep(const Eigen::Vector2d& waypoint, double step) const;
+  /// The leg_check_min_points-th smallest distance of the latest scan's band points (carried to the
+  /// present base_link by odometry) from the segment a-b of the present base_link [m]; +inf without.
+  double distanceFromSegment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
   /// The position bound of what odometry cannot see (dead_reckoning_) once the robot has turned
   /// towards `next` (map frame) from its estimate and driven there [m].
   double boundAfter(const Eigen::Vector2d& next) const;
