@@ -32,7 +32,7 @@ constexpr const char* kUsage =
     "                  [--odometry-prior | --no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] [--prior-sigma-deg D]\n"
     "                  [--prior-sigma-angle-per-rad F] [--prior-sigma-deg-per-m D] [--information-points N]\n"
     "                  [--information-sigma M] [--prior-gate SIGMAS] [--prior-all-directions]\n"
-    "                  [--odometry-gate SIGMAS (0 = off)] [--odometry-gate-rms-ratio F]\n"
+    "                  [--odometry-gate SIGMAS (default 5, 0 = off)] [--odometry-gate-rms-ratio F]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"

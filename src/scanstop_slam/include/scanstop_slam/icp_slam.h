@@ -118,8 +118,8 @@ struct SlamConfig {
   /// times the first's), else the first stands (odometry that is truly off, e.g. after a slip,
   /// keeps its correction). The coarse stage's wide pairs can slide a scan with little overlap along
   /// a weakly held direction: the house seed 2, scan 5 (2.7 m leg, guess 12 cm off) 45 cm, 4 cm
-  /// without it. [sigma], [0, 1e6]; 0: off
-  double odometry_gate = 0.0;
+  /// without it. [sigma], [0, 1e6]; 0: off (default on since 2026-12-05, docs/decisions.md)
+  double odometry_gate = 5.0;
   double odometry_gate_rms_ratio = 1.1;  ///< [1], [1, 100]
   /// Request checks (registerScan refuses, changing nothing): a finite scan point farther than this
   /// from base_link is not a measurement [m], [0.1, 10000]
