@@ -425,16 +425,8 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
     if (distance <= config_.waypoint_tolerance_m) return Drive::Reached;
     setState(State::Driving);
     const double turn = normalizeAngle(std::atan2(delta.y(), delta.x()) - est.yaw);
-    if (std::abs(turn) > config_.heading_tolerance_rad) {
-      const MotionResult r = robot_.rotate(turn);
-      noteMotion(r, false);
-      if (!r.success || r.collision) {
-        event("rotation by " + fmt(turn * 180.0 / M_PI, 1) + " deg failed: " + r.message, true);
-        if (!r.collision) return Drive::Failed;
-        escapeContact(0, "rotation");
-        return Drive::Collision;
-      }
-    }
+    if (std::abs(turn) > config_.heading_tolerance_rad)
+      if (const std::optional<Drive> failed = rotateBy(turn)) return *failed;
     double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
     // The map's clearance of the leg: what the robot may be off its estimate and still pass. When
     // odometry since the scan may be off by more (and the plain disc would pass), scan here first.
@@ -468,28 +460,9 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
           event(what + "; sidestepping " + fmt(d) + " m " + (backwards ? "backwards " : "") + "at " +
                     fmt(std::atan2(o->y(), o->x()) * 180.0 / M_PI, 0) + " deg to the heading, from where it is clear",
                 true);
-          if (std::abs(turn) > 1e-6) {
-            const MotionResult rr = robot_.rotate(turn);
-            noteMotion(rr, false);
-            if (!rr.success || rr.collision) {
-              event("rotation by " + fmt(turn * 180.0 / M_PI, 1) + " deg failed: " + rr.message, true);
-              if (!rr.collision) return Drive::Failed;
-              escapeContact(0, "rotation");
-              return Drive::Collision;
-            }
-          }
-          const double signed_d = backwards ? -d : d;
-          const MotionResult r = robot_.forward(signed_d);
-          noteMotion(r, true);
-          if (r.collision) {
-            event("collision after " + fmt(std::abs(r.achieved)) + " of " + fmt(d) + " m: " + r.message, true);
-            escapeContact(backwards ? -1 : 1, backwards ? "backward motion" : "forward motion");
-            return Drive::Collision;
-          }
-          if (!r.success) {
-            event("sidestep of " + fmt(d) + " m failed: " + r.message, true);
-            return Drive::Failed;
-          }
+          if (std::abs(turn) > 1e-6)
+            if (const std::optional<Drive> failed = rotateBy(turn)) return *failed;
+          if (const std::optional<Drive> failed = driveStraight(backwards ? -d : d)) return *failed;
           save();
           continue;  // turn to the waypoint; the leg is checked again from here
         }
@@ -500,32 +473,37 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
       what += allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it";
       if (relocalize) what += ", then scanning to re-localize";
       event(what, true);
-      if (allowed >= 0.05) {
-        const MotionResult r = robot_.forward(allowed);
-        noteMotion(r, true);
-        if (r.collision) {
-          event("collision after " + fmt(r.achieved) + " of " + fmt(allowed) + " m: " + r.message, true);
-          escapeContact(1, "forward motion");
-          return Drive::Collision;
-        }
-        if (!r.success) return Drive::Failed;
-      }
+      if (allowed >= 0.05)
+        if (const std::optional<Drive> failed = driveStraight(allowed)) return *failed;
       return relocalize ? Drive::Relocalize : Drive::Failed;
     }
-    const MotionResult r = robot_.forward(step);
-    noteMotion(r, true);
-    if (r.collision) {
-      event("collision after " + fmt(r.achieved) + " of " + fmt(step) + " m: " + r.message, true);
-      escapeContact(1, "forward motion");
-      return Drive::Collision;
-    }
-    if (!r.success) {
-      event("forward motion of " + fmt(step) + " m failed: " + r.message, true);
-      return Drive::Failed;
-    }
+    if (const std::optional<Drive> failed = driveStraight(step)) return *failed;
     save();
   }
   event("could not reach waypoint (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ") in 100 motions", true);
+  return Drive::Failed;
+}
+
+std::optional<Mission::Drive> Mission::rotateBy(double angle) {
+  const MotionResult r = robot_.rotate(angle);
+  noteMotion(r, false);
+  if (r.success && !r.collision) return std::nullopt;
+  event("rotation by " + fmt(angle * 180.0 / M_PI, 1) + " deg failed: " + r.message, true);
+  if (!r.collision) return Drive::Failed;
+  escapeContact(0, "rotation");
+  return Drive::Collision;
+}
+
+std::optional<Mission::Drive> Mission::driveStraight(double distance) {
+  const MotionResult r = robot_.forward(distance);
+  noteMotion(r, true);
+  if (r.collision) {
+    event("collision after " + fmt(std::abs(r.achieved)) + " of " + fmt(std::abs(distance)) + " m: " + r.message, true);
+    escapeContact(distance < 0.0 ? -1 : 1, distance < 0.0 ? "backward motion" : "forward motion");
+    return Drive::Collision;
+  }
+  if (r.success) return std::nullopt;
+  event("forward motion of " + fmt(distance) + " m failed: " + r.message, true);
   return Drive::Failed;
 }
 
@@ -542,13 +520,7 @@ double Mission::boundAfter(const Eigen::Vector2d& next) const {
 
 double Mission::freeTravel(const DeadReckoning* bounds, const Pose2D& from) const {
   if (!config_.leg_check || obstacles_.empty()) return std::numeric_limits<double>::infinity();
-  Pose2D odom_now;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    odom_now = state_.odom_now;
-  }
-  // From the scan's base_link to the present one by odometry, then to the leg's start.
-  const Pose2D T = from.inverse() * (odom_now.inverse() * obstacles_odom_);
+  const Pose2D T = from.inverse() * scanToPresent();  // the scan's base_link to the leg's start
   const double r = config_.leg_check_radius_m, r2 = r * r;
   std::vector<double> hits;  // where along the leg the disc first touches each point ahead
   for (const Eigen::Vector2d& q : obstacles_) {
@@ -566,14 +538,14 @@ double Mission::freeTravel(const DeadReckoning* bounds, const Pose2D& from) cons
   return hits[k - 1];
 }
 
+Pose2D Mission::scanToPresent() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return state_.odom_now.inverse() * obstacles_odom_;
+}
+
 double Mission::distanceFromSegment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
   if (obstacles_.empty()) return std::numeric_limits<double>::infinity();
-  Pose2D odom_now;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    odom_now = state_.odom_now;
-  }
-  const Pose2D T = odom_now.inverse() * obstacles_odom_;
+  const Pose2D T = scanToPresent();
   const Eigen::Vector2d ab = b - a;
   const double len2 = ab.squaredNorm();
   std::vector<double> d;
@@ -690,12 +662,7 @@ void Mission::escapeContact(int sign, const std::string& what) {
 
 std::optional<Eigen::Vector2d> Mission::touchedPoint(int sign) const {
   if (obstacles_.empty()) return std::nullopt;
-  Pose2D odom_now;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    odom_now = state_.odom_now;
-  }
-  const Pose2D T = odom_now.inverse() * obstacles_odom_;  // the scan's base_link to the present one
+  const Pose2D T = scanToPresent();
   const double reach = config_.contact_offset_m + 0.1, reach2 = reach * reach;  // odometry since the scan: a few cm
   std::optional<Eigen::Vector2d> best;
   double best2 = reach2;

@@ -183,6 +183,10 @@ class Mission {
   };
   /// `clearance_m`: the map's clearance of the leg (PlanResult::clearance_m), when known.
   Drive driveTo(const Eigen::Vector2d& waypoint, std::optional<double> clearance_m);
+  /// One motion of driveTo: booked (noteMotion); nullopt when it went through, else how the drive
+  /// ends (a failure logged; a collision booked as a contact and backed off from).
+  std::optional<Drive> rotateBy(double angle_rad);
+  std::optional<Drive> driveStraight(double distance_m);  ///< negative: backwards
   std::string deadReckoningText() const;  ///< "x m and a deg since the scan: position +-p m, heading +-h deg"
   /// After a collision on a motion in direction `sign` (+1 forward, -1 backward, 0 a rotation):
   /// records the contact point (none for a rotation) and backs off by contact_backoff_m.
@@ -207,6 +211,8 @@ class Mission {
   /// The leg_check_min_points-th smallest distance of the latest scan's band points (carried to the
   /// present base_link by odometry) from the segment a-b of the present base_link [m]; +inf without.
   double distanceFromSegment(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  /// The latest scan's base_link to the present one, by odometry (obstacles_odom_ -> odom now).
+  Pose2D scanToPresent() const;
   /// The position bound of what odometry cannot see (dead_reckoning_) once the robot has turned
   /// towards `next` (map frame) from its estimate and driven there [m].
   double boundAfter(const Eigen::Vector2d& next) const;
