@@ -25,7 +25,9 @@ void DeadReckoning::add(const Pose2D& delta) {
     position_m_ += d * std::tan(0.5 * (h0 + h1)) + model_.distance_error * d;
     driven_m_ += d;
   }
-  turned_rad_ += std::abs(normalizeAngle(delta.yaw));
+  const double turn = std::abs(normalizeAngle(delta.yaw));
+  turned_rad_ += turn;
+  position_m_ += model_.turn_position_m_per_rad * turn;
 }
 
 double DeadReckoning::widenedRadius(double radius_m, double ahead_m) const {

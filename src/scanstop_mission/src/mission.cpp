@@ -56,6 +56,7 @@ void MissionConfig::validate() const {
   requireInRange("leg_check_turn_error", leg_check_turn_error, 0.0, 0.5);
   requireInRange("leg_check_drift", leg_check_drift, 0.0, 0.5, "rad/m");
   requireInRange("leg_check_distance_error", leg_check_distance_error, 0.0, 0.5);
+  requireInRange("leg_check_turn_position", leg_check_turn_position_m_per_rad, 0.0, 0.5, "m/rad");
   requireInRange("relocalize_min_travel", relocalize_min_travel_m, 0.0, 100.0, "m");
   requireInRange("relocalize_min_turn", relocalize_min_turn_rad, 0.0, 2 * M_PI, "rad");
   requireInRange("leg_sidestep", leg_sidestep_m, 0.0, 1.0, "m");
@@ -74,7 +75,8 @@ void MissionConfig::validate() const {
 Mission::Mission(MissionConfig config, RobotSystem& robot, Log info, Log warn)
     : config_(std::move(config)), robot_(robot), info_(std::move(info)), warn_(std::move(warn)) {
   config_.validate();
-  dead_reckoning_ = DeadReckoning({config_.leg_check_turn_error, config_.leg_check_drift, config_.leg_check_distance_error});
+  dead_reckoning_ = DeadReckoning({config_.leg_check_turn_error, config_.leg_check_drift, config_.leg_check_distance_error,
+                                   config_.leg_check_turn_position_m_per_rad});
   if (::mkdir(config_.run_dir.c_str(), 0755) != 0 && errno != EEXIST)
     throw IoError(config_.run_dir, "cannot create the run directory");
   state_.world = config_.world;
@@ -424,9 +426,12 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
     const double distance = delta.norm();
     if (distance <= config_.waypoint_tolerance_m) return Drive::Reached;
     setState(State::Driving);
-    const double turn = normalizeAngle(std::atan2(delta.y(), delta.x()) - est.yaw);
-    if (std::abs(turn) > config_.heading_tolerance_rad)
-      if (const std::optional<Drive> failed = rotateBy(turn)) return *failed;
+    const LegTurn leg = legTurn(delta, est.yaw);
+    if (std::abs(leg.turn) > config_.heading_tolerance_rad)
+      if (const std::optional<Drive> failed = rotateBy(leg.turn)) return *failed;
+    // The leg's own frame: x along the way the robot moves (backwards: behind it).
+    const Pose2D way(0.0, 0.0, leg.backwards ? M_PI : 0.0);
+    const double sign = leg.backwards ? -1.0 : 1.0;
     double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
     // The map's clearance of the leg: what the robot may be off its estimate and still pass. When
     // odometry since the scan may be off by more (and the plain disc would pass), scan here first.
@@ -440,15 +445,16 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
             true);
       return Drive::Relocalize;
     }
-    const double free = freeTravel();
+    const double free = freeTravel(&dead_reckoning_, way);
     if (free - config_.leg_check_margin_m < step) {
       const double allowed = std::max(0.0, free - config_.leg_check_margin_m);
       // Clear with the plain disc: only what odometry cannot see since the scan stops the leg, and
       // a scan here (after some driving) re-localizes the robot.
-      const bool relocalize = freeTravel(false) - config_.leg_check_margin_m >= step &&
+      const bool relocalize = freeTravel(nullptr, way) - config_.leg_check_margin_m >= step &&
                               dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m;
-      std::string what = "leg check: the latest scan shows an obstruction " + fmt(free) + " m ahead on the " +
-                         fmt(step) + " m leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")";
+      std::string what = "leg check: the latest scan shows an obstruction " + fmt(free) + " m " +
+                         (leg.backwards ? "behind" : "ahead") + " on the " + fmt(step) + " m " +
+                         (leg.backwards ? "backward " : "") + "leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")";
       // Refused before it starts: a short sidestep may clear the whole leg (a jamb it grazes).
       if (!relocalize && allowed < 0.05 && config_.leg_sidestep_m > 0.0 && sidesteps == 0) {
         const Pose2D here = snapshot().estimate();
@@ -474,10 +480,10 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
       if (relocalize) what += ", then scanning to re-localize";
       event(what, true);
       if (allowed >= 0.05)
-        if (const std::optional<Drive> failed = driveStraight(allowed)) return *failed;
+        if (const std::optional<Drive> failed = driveStraight(sign * allowed)) return *failed;
       return relocalize ? Drive::Relocalize : Drive::Failed;
     }
-    if (const std::optional<Drive> failed = driveStraight(step)) return *failed;
+    if (const std::optional<Drive> failed = driveStraight(sign * step)) return *failed;
     save();
   }
   event("could not reach waypoint (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ") in 100 motions", true);
@@ -507,12 +513,22 @@ std::optional<Mission::Drive> Mission::driveStraight(double distance) {
   return Drive::Failed;
 }
 
+Mission::LegTurn Mission::legTurn(const Eigen::Vector2d& delta, double yaw) const {
+  LegTurn leg;
+  leg.turn = normalizeAngle(std::atan2(delta.y(), delta.x()) - yaw);
+  if (config_.reverse_legs && std::abs(leg.turn) > M_PI / 2) {
+    leg.turn = normalizeAngle(leg.turn + M_PI);
+    leg.backwards = true;
+  }
+  return leg;
+}
+
 double Mission::boundAfter(const Eigen::Vector2d& next) const {
   const Pose2D now = snapshot().estimate();
   DeadReckoning after = dead_reckoning_;
   const Eigen::Vector2d d = next - Eigen::Vector2d(now.x, now.y);
   if (d.norm() > 1e-9) {
-    after.add(Pose2D(0.0, 0.0, normalizeAngle(std::atan2(d.y(), d.x()) - now.yaw)));
+    after.add(Pose2D(0.0, 0.0, legTurn(d, now.yaw).turn));
     after.add(Pose2D(d.norm(), 0.0, 0.0));
   }
   return after.positionBoundM();
@@ -630,7 +646,7 @@ void Mission::escapeContact(int sign, const std::string& what) {
     Contact contact;  // radius 0: the explorer's contact_radius_m
     contact.point = Eigen::Vector2d(est.x + sign * config_.contact_offset_m * std::cos(est.yaw),
                                     est.y + sign * config_.contact_offset_m * std::sin(est.yaw));
-    std::string where = "ahead";
+    std::string where = sign < 0 ? "behind" : "ahead";
     if (const std::optional<Eigen::Vector2d> touched = touchedPoint(sign)) {
       contact.point = est.transformPoint(*touched);
       contact.radius_m = config_.contact_point_radius_m;

@@ -118,6 +118,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ros_params::optional(pnh, "leg_check_turn_error", config_.leg_check_turn_error);
   ros_params::optional(pnh, "leg_check_drift", config_.leg_check_drift);
   ros_params::optional(pnh, "leg_check_distance_error", config_.leg_check_distance_error);
+  ros_params::optional(pnh, "leg_check_turn_position", config_.leg_check_turn_position_m_per_rad);
+  ros_params::optional(pnh, "reverse_legs", config_.reverse_legs);
   ros_params::optional(pnh, "relocalize_min_travel", config_.relocalize_min_travel_m);
   ros_params::optional(pnh, "relocalize_min_turn", config_.relocalize_min_turn_rad);
   ros_params::optional(pnh, "leg_sidestep", config_.leg_sidestep_m);
@@ -183,7 +185,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
       "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts",
       "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
       "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "leg_check_turn_error",
-      "leg_check_drift", "leg_check_distance_error", "relocalize_min_travel", "relocalize_min_turn", "leg_sidestep", "max_step_retries", "retry_backoff",
+      "leg_check_drift", "leg_check_distance_error", "leg_check_turn_position", "reverse_legs", "relocalize_min_travel", "relocalize_min_turn", "leg_sidestep", "max_step_retries", "retry_backoff",
       "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir", "wait_for_service_timeout", "scan_timeout",
       "motion_timeout", "register_timeout", "plan_timeout", "mesh_timeout", "autostart", "shutdown_when_done",
       "mesh_output", "world_file", "world_frame", "map_frame", "robot_radius", "explorer_ns", "surface_planes", "run_identity",

@@ -89,6 +89,12 @@ struct MissionConfig {
   double leg_check_turn_error = 0.03;      ///< heading error per radian turned [rad/rad], [0, 0.5]
   double leg_check_drift = 0.015;          ///< heading drift per metre driven [rad/m], [0, 0.5]
   double leg_check_distance_error = 0.04;  ///< position error per metre driven [m/m], [0, 0.5]
+  double leg_check_turn_position_m_per_rad = 0.03;  ///< position error per radian turned [m/rad], [0, 0.5]
+  /// A leg whose direction lies more than 90 deg from the robot's heading is driven backwards after
+  /// the smaller turn (the scan sees all around and nothing is sensed while driving, so backwards is
+  /// as safe; a rotation's error grows with its angle: a 170 deg turn is +-5 deg and +-5 cm, its
+  /// complement +-0.3 deg and +-0.5 cm). false: every leg forwards after turning to face it.
+  bool reverse_legs = true;
   /// A leg the check stops only because of what odometry cannot see (with the plain disc it would
   /// be clear), after at least this much driving since the scan: the robot scans there to
   /// re-localize and goes on with the same path (the target is not marked unreachable). [m], [0, 100]
@@ -197,12 +203,10 @@ class Mission {
   /// Books a motion's result into the state: modelled time, odometry, true clearance (leg: a
   /// forward motion).
   void noteMotion(const MotionResult& r, bool leg);
-  /// How far the body can drive straight ahead from the present pose before the latest scan's band
-  /// points obstruct it (leg_check); +inf without a scan to check against.
-  /// With `dead_reckoning` false, the plain disc (as if odometry were exact since the scan).
-  double freeTravel(bool dead_reckoning = true) const { return freeTravel(dead_reckoning ? &dead_reckoning_ : nullptr); }
-  /// ... for a leg from `from` (a pose in the present base_link) along its x axis, with what
-  /// odometry cannot see by `bounds` (nullptr: the plain disc).
+  /// How far the body can drive straight from `from` (a pose in the present base_link) along its x
+  /// axis before the latest scan's band points obstruct it (leg_check), with what odometry cannot
+  /// see by `bounds` (nullptr: the plain disc, as if odometry were exact since the scan); +inf
+  /// without a scan to check against.
   double freeTravel(const DeadReckoning* bounds, const Pose2D& from = Pose2D()) const;
   /// The shortest sidestep (leg_sidestep_m) from the present pose after which the leg to `waypoint`
   /// (present base_link) is clear for `step` metres by the leg check: the offset in the present
@@ -216,6 +220,13 @@ class Mission {
   /// The position bound of what odometry cannot see (dead_reckoning_) once the robot has turned
   /// towards `next` (map frame) from its estimate and driven there [m].
   double boundAfter(const Eigen::Vector2d& next) const;
+  /// The turn before a leg along `delta` (map frame) from heading `yaw`, and whether the leg is
+  /// then driven backwards (reverse_legs: the smaller of the two turns).
+  struct LegTurn {
+    double turn = 0.0;
+    bool backwards = false;
+  };
+  LegTurn legTurn(const Eigen::Vector2d& delta, double yaw) const;
   bool contactBoundReached() const;
   bool checkControl();  ///< waits while paused; false when aborted
   void backoff(int attempt);  ///< waits attempt * retry_backoff_s (returns early on abort)
