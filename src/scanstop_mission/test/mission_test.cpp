@@ -642,6 +642,37 @@ TEST(Mission, ALegBehindTheRobotIsDrivenBackwardsAfterTheSmallerTurn) {
   EXPECT_GT(largest_turn, M_PI - 0.2);
 }
 
+TEST(Mission, AnObstructionJustBeyondTheWaypointDoesNotGiveTheTargetUp) {
+  // A wall across the way 0.36 m beyond the target: the leg check (disc 0.28 m widened by the
+  // leg's drift to 0.32 m there, margin 0.05 m) lets the robot drive to 1 cm short of the target,
+  // within its 5 cm tolerance: the target is reached and scanned, not given up. A wall 0.2 m
+  // nearer stops it 21 cm short: given up.
+  const auto run = [](double wall_x) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.walls = {{{wall_x, -1.0}, {wall_x, 1.0}}};
+    sys.targets = {{2.0, 0.0}};
+    sys.scan_walls = true;
+    MissionConfig c = config(dir.path());
+    c.max_scans = 3;
+    Mission m(c, sys, quiet, quiet);
+    m.run();
+    EXPECT_EQ(sys.first_collision, -1);
+    return m.snapshot();
+  };
+  const MissionState near = run(2.36);
+  EXPECT_TRUE(near.unreachable.empty());
+  bool within = false;
+  for (const auto& e : near.events) within = within || e.what.find("m short of (2.00, 0.00), within its tolerance") != std::string::npos;
+  std::string events;
+  for (const auto& e : near.events) events += e.what + "\n";
+  EXPECT_TRUE(within) << events;
+  ASSERT_GE(near.scans.size(), 2u);
+  EXPECT_NEAR(near.scans[1].true_pose->x, 2.0, 0.1);
+  const MissionState far = run(2.16);
+  ASSERT_EQ(far.unreachable.size(), 1u);
+}
+
 TEST(Mission, TheLegCheckLooksBehindOnABackwardLeg) {
   // A wall across the way 1.2 m behind the robot, which the plan does not know but the scan shows:
   // the backward leg stops before it (logged as behind), the robot never touches it.
