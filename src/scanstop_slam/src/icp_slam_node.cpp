@@ -60,6 +60,7 @@ class IcpSlamNode {
     optional("prior_gate", config.prior_gate);
     optional("odometry_gate", config.odometry_gate);
     optional("odometry_gate_rms_ratio", config.odometry_gate_rms_ratio);
+    optional("failure_retry_degeneracy_ratio", config.failure_retry_degeneracy_ratio);
     double prior_sigma_deg_per_m = config.prior_sigma_rad_per_m * 180.0 / M_PI;
     optional("prior_sigma_deg_per_m", prior_sigma_deg_per_m);
     requireInRange(pnh.resolveName("prior_sigma_deg_per_m"), prior_sigma_deg_per_m, 0.0, 57.0, "deg/m");
@@ -294,6 +295,11 @@ class IcpSlamNode {
                "odometry_gate %.1f): registered again without the coarse stage; %s",
                r.index, r.guess_distance, slam_->config().odometry_gate,
                r.gate_replaced ? "that result stands" : "it did not land within the gate as well: the first stands");
+    if (r.failure_retried)
+      ROS_WARN("icp_slam_node: scan %u: the registration failed (%s): registered again with degeneracy_ratio %.3f "
+               "(failure_retry_degeneracy_ratio); %s",
+               r.index, r.first_failure.c_str(), slam_->config().failure_retry_degeneracy_ratio,
+               r.failure_replaced ? "it converged: that result stands" : "it did not converge within the gate either: the odometry pose is kept");
     if (r.refine_rejected)
       ROS_WARN("icp_slam_node: scan %u: the refinement stage moved the pose %.1f cm, %.2f deg (beyond "
                "refine_max_correction %.1f cm, %.2f deg): kept the thesis stage's result",

@@ -33,6 +33,7 @@ constexpr const char* kUsage =
     "                  [--prior-sigma-angle-per-rad F] [--prior-sigma-deg-per-m D] [--information-points N]\n"
     "                  [--information-sigma M] [--prior-gate SIGMAS] [--prior-all-directions]\n"
     "                  [--odometry-gate SIGMAS (default 5, 0 = off)] [--odometry-gate-rms-ratio F]\n"
+    "                  [--failure-retry-degeneracy-ratio R (default 0.05, 0 = off)]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
@@ -92,14 +93,17 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
       const double e = posErr(r.map_pose, *t), y = yawErrDeg(r.map_pose, *t);
       if (!quiet)
         std::printf("scan %3zu: %s err %5.1f cm (dx %5.1f dy %5.1f) %5.2f deg, guess off %5.1f cm, it %3d, overlap %.2f, "
-                    "condition %.2f, prior %.1f sigma%s%s%s%s\n",
+                    "condition %.2f, prior %.1f sigma%s%s%s%s%s\n",
                     i, r.converged ? "ok    " : "FAILED", e * 100, (r.map_pose.x - t->x) * 100, (r.map_pose.y - t->y) * 100, y,
                     posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.prior_distance,
                     r.prior_rejected ? " (beyond prior_gate: registered without its weight)" : "", r.degenerate ? " degenerate" : "",
                     weakText(r, *t).c_str(),
                     !r.gate_retried ? ""
                     : r.gate_replaced ? " (beyond odometry_gate: registered again without the coarse stage)"
-                                      : " (beyond odometry_gate; the second registration did not stand)");
+                                      : " (beyond odometry_gate; the second registration did not stand)",
+                    !r.failure_retried ? ""
+                    : r.failure_replaced ? " (failed, registered again with failure_retry_degeneracy_ratio)"
+                                         : " (failed, and again with failure_retry_degeneracy_ratio)");
       failed += r.converged ? 0 : 1;
       sum2 += e * e;
       sum2_yaw += y * y;
@@ -157,6 +161,7 @@ int main(int argc, char** argv) {
       .real("--prior-gate", config.prior_gate, 1e-6, 1e6)
       .real("--odometry-gate", config.odometry_gate, 0.0, 1e6)
       .real("--odometry-gate-rms-ratio", config.odometry_gate_rms_ratio, 1.0, 100.0)
+      .real("--failure-retry-degeneracy-ratio", config.failure_retry_degeneracy_ratio, 0.0, 1.0)
       .flag("--prior-all-directions", config.icp.prior_all_directions)
       .real("--information-points", config.icp.information_points, 1e-6, 1e6)
       .real("--information-sigma", config.icp.information_sigma_m, 1e-6, 1.0)
@@ -253,6 +258,9 @@ int main(int argc, char** argv) {
                       posErr(info.odom_pose, *truthOf(i)) * 100);
         std::printf("\n");
         if (!r.converged) std::printf("          %s\n", r.failure.c_str());
+        if (r.failure_retried)
+          std::printf("          failed (%s), registered again with degeneracy_ratio %.3f: %s\n", r.first_failure.c_str(),
+                      config.failure_retry_degeneracy_ratio, r.failure_replaced ? "that result stands" : "failed too");
         if (config.relax)
           std::printf("          relax: %d/%d pairwise edges, %s%s, %zu poses moved, at most %.1f cm %.2f deg, %.2f s%s%s\n",
                       r.relax_edges, r.relax_edges_tried, r.relax_solved ? "solved" : "NOT solved",
