@@ -2,8 +2,8 @@
 """A forced contact: the robot backs off and never touches that spot again (issue #18).
 
 The test starts sim_node (room_10x8, thesis errors, seed 3), arms a hidden obstacle (a
-cylinder of radius 0.1 m the laser does not see) 0.7 m ahead of the robot at its first forward leg
-that reaches it, then runs icp_slam_node, explorer_node and mission_node (50 planes, 6 scans).
+cylinder of radius 0.1 m the laser does not see) 0.7 m into the way of the robot's first straight leg
+that reaches it (ahead, or behind on a backward leg), then runs icp_slam_node, explorer_node and mission_node (50 planes, 6 scans).
 The mission must end DONE with exactly one collision (the forced one), the contact recorded in its
 state, the back-off as the next motion in its log, and every later leg clear of the cylinder (the
 true clearance of each motion comes from sim_node; a second touch would be a second collision).

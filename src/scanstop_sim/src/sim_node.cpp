@@ -440,12 +440,14 @@ bool SimNode::onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::Rese
 void SimNode::placeArmedObstacle(double distance_m) {
   if (!armed_obstacle_) return;
   const Simulator::HiddenObstacle& a = *armed_obstacle_;
-  if (distance_m < a.x - a.radius - sim_->config().robot_radius_m + 0.05) return;  // this motion would not reach it
-  const Pose2D w = sim_->trueInWorld() * Pose2D(a.x, a.y, 0.0);
+  if (std::abs(distance_m) < a.x - a.radius - sim_->config().robot_radius_m + 0.05) return;  // this motion would not reach it
+  // In the motion's frame: ahead of the robot on a forward motion, behind it on a backward one.
+  const double way = distance_m < 0.0 ? -1.0 : 1.0;
+  const Pose2D w = sim_->trueInWorld() * Pose2D(way * a.x, way * a.y, 0.0);
   try {
     sim_->addHiddenObstacle({w.x, w.y, a.radius});
-    ROS_WARN("sim_node: hidden obstacle at (%.3f, %.3f) m in %s, radius %.3f m, %.2f m ahead of the robot (the laser "
-             "does not see it)", w.x, w.y, world_frame_.c_str(), a.radius, a.x);
+    ROS_WARN("sim_node: hidden obstacle at (%.3f, %.3f) m in %s, radius %.3f m, %.2f m %s the robot in its way (the "
+             "laser does not see it)", w.x, w.y, world_frame_.c_str(), a.radius, a.x, way < 0.0 ? "behind" : "ahead of");
   } catch (const std::exception& e) {
     ROS_WARN("sim_node: the armed hidden obstacle was not placed: %s", e.what());
   }
@@ -474,7 +476,8 @@ bool SimNode::onAddHiddenObstacle(scanstop_msgs::AddHiddenObstacle::Request& req
     }
     armed_obstacle_ = Simulator::HiddenObstacle{req.x, req.y, req.radius};
     res.success = true;
-    res.message = "armed: a hidden obstacle appears " + std::to_string(req.x) + " m ahead at the next forward motion that reaches it";
+    res.message = "armed: a hidden obstacle appears " + std::to_string(req.x) +
+                  " m along the way of the next straight motion that reaches it (ahead, or behind on a backward one)";
     ROS_WARN("sim_node: %s", res.message.c_str());
     return true;
   }
