@@ -445,7 +445,8 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
             true);
       return Drive::Relocalize;
     }
-    const double free = freeTravel(&dead_reckoning_, way);
+    Eigen::Vector2d blocking = Eigen::Vector2d::Zero();  // present base_link
+    const double free = freeTravel(&dead_reckoning_, way, &blocking);
     if (free - config_.leg_check_margin_m < step) {
       const double allowed = std::max(0.0, free - config_.leg_check_margin_m);
       // The last step ends within the waypoint's tolerance before the obstruction: the waypoint is
@@ -485,6 +486,7 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
         }
         what += "; no sidestep of up to " + fmt(config_.leg_sidestep_m) + " m clears it";
       }
+      if (!relocalize) noteObstruction(snapshot().estimate().transformPoint(blocking));
       if (relocalize)
         what += " within what odometry cannot see (" + deadReckoningText() + ")";
       what += allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it";
@@ -545,24 +547,37 @@ double Mission::boundAfter(const Eigen::Vector2d& next) const {
   return after.positionBoundM();
 }
 
-double Mission::freeTravel(const DeadReckoning* bounds, const Pose2D& from) const {
+double Mission::freeTravel(const DeadReckoning* bounds, const Pose2D& from, Eigen::Vector2d* blocking) const {
   if (!config_.leg_check || obstacles_.empty()) return std::numeric_limits<double>::infinity();
-  const Pose2D T = from.inverse() * scanToPresent();  // the scan's base_link to the leg's start
+  const Pose2D to_present = scanToPresent();
+  const Pose2D T = from.inverse() * to_present;  // the scan's base_link to the leg's start
   const double r = config_.leg_check_radius_m, r2 = r * r;
-  std::vector<double> hits;  // where along the leg the disc first touches each point ahead
-  for (const Eigen::Vector2d& q : obstacles_) {
-    const Eigen::Vector2d p = T.transformPoint(q);
+  std::vector<std::pair<double, size_t>> hits;  // where along the leg the disc first touches each point ahead
+  for (size_t i = 0; i < obstacles_.size(); ++i) {
+    const Eigen::Vector2d p = T.transformPoint(obstacles_[i]);
     if (p.squaredNorm() < r2) continue;  // under the body now
     // The disc that holds the true body there, given what odometry cannot see since the scan.
     const double re = bounds ? bounds->widenedRadius(r, p.x()) : r;
     if (std::abs(p.y()) >= re) continue;  // beside the way
     const double s = p.x() - std::sqrt(re * re - p.y() * p.y());
-    if (s >= 0.0) hits.push_back(s);
+    if (s >= 0.0) hits.emplace_back(s, i);
   }
   const size_t k = static_cast<size_t>(config_.leg_check_min_points);
   if (hits.size() < k) return std::numeric_limits<double>::infinity();
   std::nth_element(hits.begin(), hits.begin() + (k - 1), hits.end());
-  return hits[k - 1];
+  if (blocking) *blocking = to_present.transformPoint(obstacles_[hits[k - 1].second]);
+  return hits[k - 1].first;
+}
+
+void Mission::noteObstruction(const Eigen::Vector2d& point) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const Contact& o : state_.obstructions)
+    if ((o.point - point).norm() < config_.contact_point_radius_m) return;  // known
+  Contact o;
+  o.point = point;
+  o.radius_m = config_.contact_point_radius_m;
+  state_.obstructions.push_back(o);
+  if (state_.obstructions.size() > kMaxObstructions) state_.obstructions.erase(state_.obstructions.begin());
 }
 
 Pose2D Mission::scanToPresent() const {
@@ -798,7 +813,9 @@ State Mission::run() {
       for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
         backoff(attempt);
         if (!checkControl()) return finish(State::Aborted, "aborted by the user");  // paused: no retry burnt
-        plan = robot_.planNext(now.estimate(), now.unreachable, now.contacts, goal);
+        std::vector<Contact> obstacles = now.contacts;  // the contacts and the leg check's obstructions
+        obstacles.insert(obstacles.end(), now.obstructions.begin(), now.obstructions.end());
+        plan = robot_.planNext(now.estimate(), now.unreachable, obstacles, goal);
         if (plan.success) break;
         event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
       }

@@ -102,16 +102,20 @@ void MissionState::save(const std::string& path) const {
     unreachable_list.push_back(n);
   }
   root["unreachable"] = unreachable_list;
-  YAML::Node contact_list(YAML::NodeType::Sequence);
-  for (const auto& c : contacts) {
-    YAML::Node n(YAML::NodeType::Sequence);
-    n.SetStyle(YAML::EmitterStyle::Flow);
-    n.push_back(c.point.x());
-    n.push_back(c.point.y());
-    n.push_back(c.radius_m);
-    contact_list.push_back(n);
-  }
-  root["contacts"] = contact_list;
+  const auto contactList = [](const std::vector<Contact>& list) {
+    YAML::Node out(YAML::NodeType::Sequence);
+    for (const auto& c : list) {
+      YAML::Node n(YAML::NodeType::Sequence);
+      n.SetStyle(YAML::EmitterStyle::Flow);
+      n.push_back(c.point.x());
+      n.push_back(c.point.y());
+      n.push_back(c.radius_m);
+      out.push_back(n);
+    }
+    return out;
+  };
+  root["contacts"] = contactList(contacts);
+  root["obstructions"] = contactList(obstructions);
   root["clearance_motions"] = clearance_motions;
   root["clearance_legs"] = clearance_legs;
   root["close_legs"] = close_legs;
@@ -183,17 +187,22 @@ MissionState MissionState::load(const std::string& path) {
       throw std::runtime_error("path_next " + std::to_string(m.path_next) + " is outside the path of " +
                                std::to_string(m.path.size()) + " waypoints");
     for (const YAML::Node& n : root["unreachable"]) m.unreachable.emplace_back(n[0].as<double>(), n[1].as<double>());
-    for (const YAML::Node& n : root["contacts"]) {  // [x, y, radius]; files before the radius: [x, y]
-      Contact contact;
-      contact.point = Eigen::Vector2d(n[0].as<double>(), n[1].as<double>());
-      contact.radius_m = n.size() > 2 ? n[2].as<double>() : 0.0;
-      if (!contact.point.allFinite() || !std::isfinite(contact.radius_m) || contact.radius_m < 0.0 ||
-          contact.radius_m > 2.0)
-        throw std::runtime_error("contact (" + std::to_string(contact.point.x()) + ", " +
-                                 std::to_string(contact.point.y()) + ") radius " + std::to_string(contact.radius_m) +
-                                 " is not finite or not in [0, 2] m");
-      m.contacts.push_back(contact);
-    }
+    // [x, y, radius]; contacts of files before the radius: [x, y]; files before obstructions: none
+    const auto readContacts = [&root](const char* key, const char* what, std::vector<Contact>& list) {
+      for (const YAML::Node& n : root[key]) {
+        Contact contact;
+        contact.point = Eigen::Vector2d(n[0].as<double>(), n[1].as<double>());
+        contact.radius_m = n.size() > 2 ? n[2].as<double>() : 0.0;
+        if (!contact.point.allFinite() || !std::isfinite(contact.radius_m) || contact.radius_m < 0.0 ||
+            contact.radius_m > 2.0)
+          throw std::runtime_error(std::string(what) + " (" + std::to_string(contact.point.x()) + ", " +
+                                   std::to_string(contact.point.y()) + ") radius " + std::to_string(contact.radius_m) +
+                                   " is not finite or not in [0, 2] m");
+        list.push_back(contact);
+      }
+    };
+    readContacts("contacts", "contact", m.contacts);
+    readContacts("obstructions", "obstruction", m.obstructions);
     m.clearance_motions = root["clearance_motions"].as<int>(0);
     m.clearance_legs = root["clearance_legs"].as<int>(0);
     m.close_legs = root["close_legs"].as<int>(0);

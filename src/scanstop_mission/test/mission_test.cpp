@@ -1023,6 +1023,20 @@ TEST(Mission, TheLegCheckStopsBeforeAnObstacleTheLatestScanShowsAndTheMapDoesNot
   for (const auto& e : s.events) logged = logged || e.what.find("leg check: the latest scan shows an obstruction") == 0;
   EXPECT_TRUE(logged);
   EXPECT_TRUE(s.complete);
+  // The point that stopped it is an obstruction (no contact): every later plan gets it as an
+  // obstacle, and it is saved with the state.
+  ASSERT_EQ(s.obstructions.size(), 1u);
+  EXPECT_NEAR(s.obstructions[0].point.x(), 1.5, 0.03);
+  EXPECT_NEAR(s.obstructions[0].point.y(), 0.0, 0.1);
+  EXPECT_DOUBLE_EQ(s.obstructions[0].radius_m, c.contact_point_radius_m);
+  ASSERT_GE(sys.plan_contacts.size(), 2u);
+  EXPECT_TRUE(sys.plan_contacts.front().empty());
+  ASSERT_EQ(sys.plan_contacts.back().size(), 1u);
+  EXPECT_TRUE(sys.plan_contacts.back()[0].point.isApprox(s.obstructions[0].point));
+  const MissionState saved = MissionState::load(m.statePath());
+  ASSERT_EQ(saved.obstructions.size(), 1u);
+  EXPECT_TRUE(saved.obstructions[0].point.isApprox(s.obstructions[0].point, 1e-6));
+  EXPECT_TRUE(saved.contacts.empty());
   // Off, the same mission drives into the wall.
   TempDir dir2;
   FakeSystem off_sys;

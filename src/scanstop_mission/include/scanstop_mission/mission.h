@@ -207,7 +207,13 @@ class Mission {
   /// axis before the latest scan's band points obstruct it (leg_check), with what odometry cannot
   /// see by `bounds` (nullptr: the plain disc, as if odometry were exact since the scan); +inf
   /// without a scan to check against.
-  double freeTravel(const DeadReckoning* bounds, const Pose2D& from = Pose2D()) const;
+  /// blocking: the point that ends the free travel (present base_link), when it is finite.
+  double freeTravel(const DeadReckoning* bounds, const Pose2D& from = Pose2D(), Eigen::Vector2d* blocking = nullptr) const;
+  /// Keeps a point (map frame) the leg check stopped a leg before as an obstruction for every later
+  /// plan (MissionState::obstructions, disc contact_point_radius_m; one within that of a known one
+  /// is known; the oldest goes beyond kMaxObstructions).
+  void noteObstruction(const Eigen::Vector2d& point);
+  static constexpr size_t kMaxObstructions = 100;
   /// The shortest sidestep (leg_sidestep_m) from the present pose after which the leg to `waypoint`
   /// (present base_link) is clear for `step` metres by the leg check: the offset in the present
   /// base_link, or nullopt.

@@ -49,6 +49,11 @@ struct MissionState {
   std::vector<ScanRecord> scans;
   std::vector<Eigen::Vector2d> unreachable;  ///< targets the robot failed to reach (map frame)
   std::vector<Contact> contacts;             ///< where the robot touched something (map frame): obstacles
+  /// Where the leg check stopped a leg before an obstruction the latest scan showed (map frame; the
+  /// point that stopped it): obstacles for every later plan like the contacts, but no contact (they
+  /// do not count towards max_contacts). The explorer's floor map may not hold them (sparse points
+  /// it takes for speckle), and without them every later plan may lead through the same spot.
+  std::vector<Contact> obstructions;
   // True clearance of the body (simulation): over every motion with a measurement.
   int clearance_motions = 0;                 ///< motions with a true clearance
   int clearance_legs = 0;                    ///< ... of them straight legs (forward motions)
