@@ -453,8 +453,8 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
       // reached there (furnished_1 seed 4 gave up a target 1 cm short of it and scanned again).
       if (step >= distance - 1e-9 && allowed >= distance - config_.waypoint_tolerance_m) {
         event("leg check: stopping " + fmt(distance - allowed, 3) + " m short of (" + fmt(waypoint.x()) + ", " +
-             fmt(waypoint.y()) + "), within its tolerance, before an obstruction " + fmt(free) + " m " +
-                  (leg.backwards ? "behind" : "ahead"));
+              fmt(waypoint.y()) + "), within its tolerance, before an obstruction " + fmt(free) + " m " +
+              (leg.backwards ? "behind" : "ahead"));
         if (allowed > 0.0)
           if (const std::optional<Drive> failed = driveStraight(sign * allowed)) return *failed;
         save();
