@@ -278,6 +278,26 @@ MissionConfig config(const std::string& dir) {
 
 void quiet(const std::string&) {}
 
+/// Whether an event of the mission contains `text`.
+bool logged(const MissionState& s, const std::string& text) {
+  for (const auto& e : s.events)
+    if (e.what.find(text) != std::string::npos) return true;
+  return false;
+}
+
+/// A mission of at most 3 scans to `target` with a wall across the x axis at `wall_x` (y in [-1, 1])
+/// that the scans see and the fake plans do not know; sys keeps what it observed.
+MissionState runAcrossWall(const std::string& dir, FakeSystem& sys, double wall_x, const Eigen::Vector2d& target) {
+  sys.walls = {{{wall_x, -1.0}, {wall_x, 1.0}}};
+  sys.targets = {target};
+  sys.scan_walls = true;
+  MissionConfig c = config(dir);
+  c.max_scans = 3;
+  Mission m(c, sys, quiet, quiet);
+  m.run();
+  return m.snapshot();
+}
+
 TEST(Mission, ExploresEveryTargetAndEndsComplete) {
   TempDir dir;
   FakeSystem sys;
@@ -650,23 +670,13 @@ TEST(Mission, AnObstructionJustBeyondTheWaypointDoesNotGiveTheTargetUp) {
   const auto run = [](double wall_x) {
     TempDir dir;
     FakeSystem sys;
-    sys.walls = {{{wall_x, -1.0}, {wall_x, 1.0}}};
-    sys.targets = {{2.0, 0.0}};
-    sys.scan_walls = true;
-    MissionConfig c = config(dir.path());
-    c.max_scans = 3;
-    Mission m(c, sys, quiet, quiet);
-    m.run();
+    const MissionState s = runAcrossWall(dir.path(), sys, wall_x, {2.0, 0.0});
     EXPECT_EQ(sys.first_collision, -1);
-    return m.snapshot();
+    return s;
   };
   const MissionState near = run(2.36);
   EXPECT_TRUE(near.unreachable.empty());
-  bool within = false;
-  for (const auto& e : near.events) within = within || e.what.find("m short of (2.00, 0.00), within its tolerance") != std::string::npos;
-  std::string events;
-  for (const auto& e : near.events) events += e.what + "\n";
-  EXPECT_TRUE(within) << events;
+  EXPECT_TRUE(logged(near, "m short of (2.00, 0.00), within its tolerance"));
   ASSERT_GE(near.scans.size(), 2u);
   EXPECT_NEAR(near.scans[1].true_pose->x, 2.0, 0.1);
   const MissionState far = run(2.16);
@@ -678,19 +688,10 @@ TEST(Mission, TheLegCheckLooksBehindOnABackwardLeg) {
   // the backward leg stops before it (logged as behind), the robot never touches it.
   TempDir dir;
   FakeSystem sys;
-  sys.walls = {{{-1.2, -1.0}, {-1.2, 1.0}}};
-  sys.targets = {{-2.5, 0.0}};
-  sys.scan_walls = true;
-  MissionConfig c = config(dir.path());
-  c.max_scans = 3;
-  Mission m(c, sys, quiet, quiet);
-  m.run();
+  const MissionState s = runAcrossWall(dir.path(), sys, -1.2, {-2.5, 0.0});
   EXPECT_EQ(sys.first_collision, -1);
   EXPECT_GT(sys.truth.x, -1.2 + 0.26);
-  bool behind = false;
-  for (const auto& e : m.snapshot().events)
-    behind = behind || e.what.find("m behind on the 2.00 m backward leg to (-2.50, 0.00)") != std::string::npos;
-  EXPECT_TRUE(behind);
+  EXPECT_TRUE(logged(s, "m behind on the 2.00 m backward leg to (-2.50, 0.00)"));
   double backwards = 0.0;
   for (const auto& [kind, amount] : sys.motions)
     if (kind == 'f' && amount < 0.0) backwards += -amount;

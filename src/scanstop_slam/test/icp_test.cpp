@@ -381,15 +381,16 @@ TEST(Icp, SearchBoundsGiveTheSameResultAsFullSearches) {
 }
 
 /// A 2 m wide corridor (walls y = 0 and y = 2, 2.5 m high) between x0 and x1, with a pillar at
-/// x in [3, 3.3] (its two faces across the corridor fix x, weakly: a twentieth of the points); 2 mm noise.
-std::vector<Eigen::Vector3f> corridorPoints(std::mt19937& rng, float x0, float x1, int n) {
+/// x in [3, 3.3] (its two faces across the corridor fix x, weakly: two in every pillar_every points,
+/// by default a twentieth); 2 mm noise.
+std::vector<Eigen::Vector3f> corridorPoints(std::mt19937& rng, float x0, float x1, int n, int pillar_every = 40) {
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   std::normal_distribution<float> noise(0.0f, 0.002f);
   std::vector<Eigen::Vector3f> pts;
   for (int i = 0; i < n; ++i) {
     const float a = u(rng), b = u(rng);
-    if (i % 40 == 0) pts.emplace_back(3.0f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);       // pillar, west face
-    else if (i % 40 == 1) pts.emplace_back(3.3f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);  // east face
+    if (i % pillar_every == 0) pts.emplace_back(3.0f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);       // pillar, west face
+    else if (i % pillar_every == 1) pts.emplace_back(3.3f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);  // east face
     else pts.emplace_back(x0 + (x1 - x0) * a, (i % 2 ? 2.0f : 0.0f) + noise(rng), 2.5f * b);  // walls
   }
   return pts;
@@ -1322,6 +1323,20 @@ TEST(VoxelCentroids, OnePointPerVoxelAtTheMeanOfItsPoints) {
 }
 
 
+/// A SLAM of `config` that maps `first` (world points, the first scan at the origin), then registers
+/// `second_world` (world points) seen from `truth` with odometry `odom`: the second registration.
+Registration registerSecondScan(const SlamConfig& config, const std::vector<Eigen::Vector3f>& first,
+                                const std::vector<Eigen::Vector3f>& second_world, const Pose2D& truth, const Pose2D& odom) {
+  IcpSlam slam(config);
+  PointCloud a, b;
+  a.points = first;
+  a.setUnorganized();
+  b.points = transformed(second_world, truth.toIsometry3d().inverse());
+  b.setUnorganized();
+  slam.registerScan(a, Pose2D(), Eigen::Vector3d(0, 0, 0.45));
+  return slam.registerScan(b, odom, Eigen::Vector3d(0, 0, 0.45));
+}
+
 TEST(IcpSlam, AFailedRegistrationIsRegisteredAgainWithMoreDirectionsKeptAtTheGuess) {
   // A corridor whose axis only a small pillar holds (a hundredth of the points; condition about
   // 45: not weak at degeneracy_ratio 0.01, weak at 0.05). The second scan's guess is 4 cm off along
@@ -1332,35 +1347,15 @@ TEST(IcpSlam, AFailedRegistrationIsRegisteredAgainWithMoreDirectionsKeptAtTheGue
   // registered again, the axis counts as weak and keeps the guess, the rest is corrected, and that
   // result stands. Off (0): the failure stands and the guess is kept, as before.
   std::mt19937 rng(11);
-  const int every = 200;  // two pillar points in every 200
-  const auto scene = [&](float x0, float x1, int n) {
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    std::normal_distribution<float> noise(0.0f, 0.002f);
-    std::vector<Eigen::Vector3f> pts;
-    for (int i = 0; i < n; ++i) {
-      const float a = u(rng), b = u(rng);
-      if (i % every == 0) pts.emplace_back(3.0f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);       // pillar, west face
-      else if (i % every == 1) pts.emplace_back(3.3f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);  // east face
-      else pts.emplace_back(x0 + (x1 - x0) * a, (i % 2 ? 2.0f : 0.0f) + noise(rng), 2.5f * b);  // walls
-    }
-    return pts;
-  };
-  const std::vector<Eigen::Vector3f> first = scene(0.0f, 4.0f, 120000);
+  const std::vector<Eigen::Vector3f> first = corridorPoints(rng, 0.0f, 4.0f, 120000, 200);
   const Pose2D truth(1.5, 0.0, 0.0);
-  const std::vector<Eigen::Vector3f> second_world = scene(2.0f, 6.0f, 40000);
+  const std::vector<Eigen::Vector3f> second_world = corridorPoints(rng, 2.0f, 6.0f, 40000, 200);
   const Pose2D odom(1.54, 0.01, 0.003);  // 4 cm along, 1 cm across, 0.2 deg off
   const auto run = [&](double retry_ratio) {
     SlamConfig config;
     config.failure_retry_degeneracy_ratio = retry_ratio;
     config.icp.max_correction_m = 0.02;
-    IcpSlam slam(config);
-    PointCloud a, b;
-    a.points = first;
-    a.setUnorganized();
-    b.points = transformed(second_world, truth.toIsometry3d().inverse());
-    b.setUnorganized();
-    slam.registerScan(a, Pose2D(), Eigen::Vector3d(0, 0, 0.45));
-    const Registration r = slam.registerScan(b, odom, Eigen::Vector3d(0, 0, 0.45));
+    const Registration r = registerSecondScan(config, first, second_world, truth, odom);
     std::cout << "retry ratio " << retry_ratio << ": " << (r.converged ? "converged" : "failed: " + r.failure)
               << ", first failure '" << r.first_failure << "', condition " << r.condition << ", pose (" << r.map_pose.x
               << ", " << r.map_pose.y << ", " << r.map_pose.yaw << ")" << std::endl;
@@ -1399,14 +1394,7 @@ TEST(IcpSlam, TheOdometryGateLeavesRegistrationsWithinItAndKeepsACorrectionFarBe
   const auto second = [&](double gate, const Pose2D& odom) {
     SlamConfig config;
     config.odometry_gate = gate;
-    IcpSlam slam(config);
-    PointCloud a, b;
-    a.points = room;
-    a.setUnorganized();
-    b.points = transformed(wider, truth.toIsometry3d().inverse());
-    b.setUnorganized();
-    slam.registerScan(a, Pose2D(), Eigen::Vector3d(0, 0, 0.45));
-    return slam.registerScan(b, odom, Eigen::Vector3d(0, 0, 0.45));
+    return registerSecondScan(config, room, wider, truth, odom);
   };
   const Pose2D near_odom(0.52, 0.01, 0.005), slipped(0.75, 0.05, 0.02);
   const Registration off = second(0.0, near_odom), within = second(3.0, near_odom);
