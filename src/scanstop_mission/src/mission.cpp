@@ -49,6 +49,7 @@ void MissionConfig::validate() const {
   requireInRange("contact_point_radius", contact_point_radius_m, 1e-3, 2.0, "m");
   requireInRange("leg_check_radius", leg_check_radius_m, 1e-3, 2.0, "m");
   requireInRange("leg_check_margin", leg_check_margin_m, 0.0, 1.0, "m");
+  requireInRange("obstruction_standoff", obstruction_standoff_m, 0.0, 2.0, "m");
   requireInRange("leg_check_min_z", leg_check_min_z_m, -1.0, 5.0, "m");
   requireInRange("leg_check_max_z", leg_check_max_z_m, leg_check_min_z_m, 5.0, "m");
   requireInRange("leg_check_self", leg_check_self_m, 0.0, 2.0, "m");
@@ -489,11 +490,15 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
       if (!relocalize) noteObstruction(snapshot().estimate().transformPoint(blocking));
       if (relocalize)
         what += " within what odometry cannot see (" + deadReckoningText() + ")";
-      what += allowed >= 0.05 ? "; driving " + fmt(allowed) + " m of it" : "; not driving it";
+      // A scan follows where the robot stops: stand off the obstruction so that it sees past it.
+      const double drive =
+          std::max(0.0, free - std::max(config_.leg_check_margin_m, config_.obstruction_standoff_m));
+      what += drive >= 0.05 ? "; driving " + fmt(drive) + " m of it" : "; not driving it";
+      if (drive < allowed - 1e-9) what += " (" + fmt(free - drive) + " m before the obstruction)";
       if (relocalize) what += ", then scanning to re-localize";
       event(what, true);
-      if (allowed >= 0.05)
-        if (const std::optional<Drive> failed = driveStraight(sign * allowed)) return *failed;
+      if (drive >= 0.05)
+        if (const std::optional<Drive> failed = driveStraight(sign * drive)) return *failed;
       return relocalize ? Drive::Relocalize : Drive::Failed;
     }
     if (const std::optional<Drive> failed = driveStraight(sign * step)) return *failed;

@@ -111,6 +111,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   }
   ros_params::optional(pnh, "leg_check_radius", config_.leg_check_radius_m);
   ros_params::optional(pnh, "leg_check_margin", config_.leg_check_margin_m);
+  ros_params::optional(pnh, "obstruction_standoff", config_.obstruction_standoff_m);
   ros_params::optional(pnh, "leg_check_min_z", config_.leg_check_min_z_m);
   ros_params::optional(pnh, "leg_check_max_z", config_.leg_check_max_z_m);
   ros_params::optional(pnh, "leg_check_self", config_.leg_check_self_m);
@@ -184,6 +185,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
       "scan_on_the_way", "scan_error_bound",
       "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts",
       "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
+      "obstruction_standoff",
       "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "leg_check_turn_error",
       "leg_check_drift", "leg_check_distance_error", "leg_check_turn_position", "reverse_legs", "relocalize_min_travel", "relocalize_min_turn", "leg_sidestep", "max_step_retries", "retry_backoff",
       "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir", "wait_for_service_timeout", "scan_timeout",

@@ -1018,8 +1018,12 @@ TEST(Mission, TheLegCheckStopsBeforeAnObstacleTheLatestScanShowsAndTheMapDoesNot
   EXPECT_TRUE(s.contacts.empty());
   ASSERT_EQ(s.unreachable.size(), 1u);
   EXPECT_TRUE(s.unreachable[0].isApprox(Eigen::Vector2d(3.0, 0.0)));
-  // It stopped leg_check_margin before the body would touch the wall (x = 1.5 - radius - margin).
-  EXPECT_NEAR(sys.forwards.front(), 1.5 - c.leg_check_radius_m - c.leg_check_margin_m, 0.02);
+  // It stopped obstruction_standoff before the body would touch the wall (x = 1.5 - radius -
+  // standoff), and the scan it then took to re-localize is there: it sees past the wall's edge.
+  EXPECT_NEAR(sys.forwards.front(), 1.5 - c.leg_check_radius_m - c.obstruction_standoff_m, 0.02);
+  ASSERT_GE(s.scans.size(), 2u);
+  EXPECT_NEAR(s.scans[1].true_pose->x, 1.5 - c.leg_check_radius_m - c.obstruction_standoff_m, 0.03);
+  EXPECT_TRUE(logged(s, "m before the obstruction)"));
   bool logged = false;
   for (const auto& e : s.events) logged = logged || e.what.find("leg check: the latest scan shows an obstruction") == 0;
   EXPECT_TRUE(logged);
@@ -1049,6 +1053,18 @@ TEST(Mission, TheLegCheckStopsBeforeAnObstacleTheLatestScanShowsAndTheMapDoesNot
   Mission m2(off, off_sys, quiet, quiet);
   EXPECT_EQ(m2.run(), State::Done);
   EXPECT_EQ(m2.snapshot().collisions, 1);
+  // Without the standoff it stops leg_check_margin before the wall.
+  TempDir dir3;
+  FakeSystem near_sys;
+  near_sys.walls = sys.walls;
+  near_sys.targets = sys.targets;
+  near_sys.scan_walls = true;
+  MissionConfig near = config(dir3.path());
+  near.obstruction_standoff_m = 0.0;
+  Mission m3(near, near_sys, quiet, quiet);
+  EXPECT_EQ(m3.run(), State::Done);
+  EXPECT_EQ(m3.snapshot().collisions, 0);
+  EXPECT_NEAR(near_sys.forwards.front(), 1.5 - near.leg_check_radius_m - near.leg_check_margin_m, 0.02);
 }
 
 TEST(Mission, ScanBudgetEndsTheMission) {
