@@ -60,6 +60,7 @@ struct ScanOutput {
   uint32_t valid_points = 0;
   uint32_t planes_dropped = 0;
   uint32_t outliers_removed = 0;
+  uint32_t mixed_pixels = 0;      ///< readings mixed from surfaces at different depths (scanner.mixed_pixels)
   double duration_s = 0.0;        ///< modelled
 };
 
