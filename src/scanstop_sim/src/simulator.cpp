@@ -361,8 +361,8 @@ ScanOutput Simulator::scan(int planes) {
     }
     const float threshold = static_cast<float>(sc.mixed_pixel_threshold_m);
     const int n = sc.mixed_pixel_samples;
-    uint32_t mixed = 0;
-#pragma omp parallel for schedule(dynamic, 4) reduction(+ : mixed)
+    uint32_t mixed = 0, candidates = 0;
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : mixed, candidates)
     for (int p = 0; p < planes; ++p) {
       if (lost[p]) continue;
       std::mt19937_64 rng = planeRng(kNoiseSalt, p), sub_rng = planeRng(kSubRaySalt, p);
@@ -386,6 +386,7 @@ ScanOutput Simulator::scan(int planes) {
         }
         float hit = returnedRange(world_, c);
         if (candidate) {
+          ++candidates;
           // n x n sub-rays over the square footprint (angular offsets in the plane and across it).
           const Eigen::Vector3f d = dirBase(p, b);
           const Eigen::Vector3f t_in(static_cast<float>(beam_cos[b] * plane_cos[p]),
@@ -418,6 +419,7 @@ ScanOutput Simulator::scan(int planes) {
       }
     }
     out.mixed_pixels = mixed;
+    out.mixed_pixel_candidates = candidates;
   }
   for (int p = 0; p < planes; ++p) out.planes_dropped += lost[p];
   if (config_.outlier_filter) out.outliers_removed = static_cast<uint32_t>(filterOutliers(cloud));
