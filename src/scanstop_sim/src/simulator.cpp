@@ -311,12 +311,13 @@ ScanOutput Simulator::scan(int planes) {
     beam_cos[b] = std::cos(theta);
   }
   std::vector<double> plane_cos(planes), plane_sin(planes);
-  std::vector<Eigen::Vector3f> origin_world(planes);
+  std::vector<Eigen::Vector3f> origin_base(planes), origin_world(planes);
   for (int p = 0; p < planes; ++p) {
     const double phi = M_PI * p / planes;
     plane_cos[p] = std::cos(phi);
     plane_sin[p] = std::sin(phi);
-    origin_world[p] = T_world_base * sc.origin(p, planes);
+    origin_base[p] = sc.origin(p, planes);
+    origin_world[p] = T_world_base * origin_base[p];
   }
   const auto dirBase = [&](int p, int b) {
     return Eigen::Vector3f(static_cast<float>(beam_sin[b] * plane_cos[p]), static_cast<float>(beam_sin[b] * plane_sin[p]),
@@ -332,7 +333,7 @@ ScanOutput Simulator::scan(int planes) {
     if (!std::isfinite(r)) return;
     const size_t i = static_cast<size_t>(p) * beams + b;
     cloud.ranges[i] = r;
-    cloud.points[i] = sc.origin(p, planes) + r * dirBase(p, b);
+    cloud.points[i] = origin_base[p] + r * dirBase(p, b);
   };
 
   if (!sc.mixed_pixels) {
@@ -351,13 +352,17 @@ ScanOutput Simulator::scan(int planes) {
     // Pass 1: the centre ray of every beam. Pass 2: beams whose neighbours (in the plane and in
     // the planes beside it) lie off their surface's plane get sub-rays over their footprint.
     std::vector<RayHit> hits(static_cast<size_t>(planes) * beams);
+    std::vector<Eigen::Vector3f> hit_points(hits.size());  // world frame; meaningful where hits[i].hit()
 #pragma omp parallel for schedule(dynamic, 4)
     for (int p = 0; p < planes; ++p) {
       if (lost[p]) continue;
       std::mt19937_64 glass_rng = planeRng(kGlassSalt, p);
-      for (int b = 0; b < beams; ++b)
-        hits[static_cast<size_t>(p) * beams + b] =
-            traceBeam(world_, origin_world[p], R_world_base * dirBase(p, b), tfar, glass_rng);
+      for (int b = 0; b < beams; ++b) {
+        const size_t i = static_cast<size_t>(p) * beams + b;
+        const Eigen::Vector3f d_world = R_world_base * dirBase(p, b);
+        hits[i] = traceBeam(world_, origin_world[p], d_world, tfar, glass_rng);
+        hit_points[i] = origin_world[p] + hits[i].t * d_world;
+      }
     }
     const float threshold = static_cast<float>(sc.mixed_pixel_threshold_m);
     const int n = sc.mixed_pixel_samples;
@@ -369,8 +374,7 @@ ScanOutput Simulator::scan(int planes) {
       std::normal_distribution<double> standard_normal(0.0, 1.0);
       for (int b = 0; b < beams; ++b) {
         const RayHit& c = hits[static_cast<size_t>(p) * beams + b];
-        const Eigen::Vector3f d_world = R_world_base * dirBase(p, b);
-        const Eigen::Vector3f c_point = origin_world[p] + c.t * d_world;
+        const Eigen::Vector3f& c_point = hit_points[static_cast<size_t>(p) * beams + b];
         // Another surface than the centre's: a return where it has none (or the reverse), or a
         // point more than the threshold off its plane (a plane seen at grazing incidence is one surface).
         const auto otherSurface = [&](const RayHit& h, const Eigen::Vector3f& point) {
@@ -381,8 +385,8 @@ ScanOutput Simulator::scan(int planes) {
         const int nq[4] = {p, p, p - 1, p + 1}, nb[4] = {b - 1, b + 1, b, b};
         for (int k = 0; k < 4 && !candidate; ++k) {
           if (nq[k] < 0 || nq[k] >= planes || nb[k] < 0 || nb[k] >= beams || lost[nq[k]]) continue;
-          const RayHit& h = hits[static_cast<size_t>(nq[k]) * beams + nb[k]];
-          candidate = otherSurface(h, origin_world[nq[k]] + h.t * (R_world_base * dirBase(nq[k], nb[k])));
+          const size_t i = static_cast<size_t>(nq[k]) * beams + nb[k];
+          candidate = otherSurface(hits[i], hit_points[i]);
         }
         float hit = returnedRange(world_, c);
         if (candidate) {
@@ -394,22 +398,31 @@ ScanOutput Simulator::scan(int planes) {
           const Eigen::Vector3f t_across(static_cast<float>(-plane_sin[p]), static_cast<float>(plane_cos[p]), 0.0f);
           bool step = false;
           double weighted = 0.0, weights = 0.0;
-          for (int i = 0; i < n; ++i) {
+          const auto subRay = [&](int i, int j) {
             const double a = std::tan(((i + 0.5) / n - 0.5) * sc.beam_divergence_rad);
-            for (int j = 0; j < n; ++j) {
-              const double e = std::tan(((j + 0.5) / n - 0.5) * sc.beam_divergence_rad);
-              const Eigen::Vector3f sub =
-                  R_world_base * (d + static_cast<float>(a) * t_in + static_cast<float>(e) * t_across).normalized();
-              const RayHit h = traceBeam(world_, origin_world[p], sub, tfar, sub_rng);
-              step = step || otherSurface(h, origin_world[p] + h.t * sub);
-              if (!h.hit()) continue;
-              // Each sub-ray stands for an equal share of the footprint; the power a surface
-              // returns falls with the square of its distance.
-              const double w = 1.0 / (static_cast<double>(h.t) * h.t);
-              weighted += w * returnedRange(world_, h);
-              weights += w;
-            }
-          }
+            const double e = std::tan(((j + 0.5) / n - 0.5) * sc.beam_divergence_rad);
+            const Eigen::Vector3f sub =
+                R_world_base * (d + static_cast<float>(a) * t_in + static_cast<float>(e) * t_across).normalized();
+            const RayHit h = traceBeam(world_, origin_world[p], sub, tfar, sub_rng);
+            step = step || otherSurface(h, origin_world[p] + h.t * sub);
+            if (!h.hit()) return;
+            // Each sub-ray stands for an equal share of the footprint; the power a surface
+            // returns falls with the square of its distance.
+            const double w = 1.0 / (static_cast<double>(h.t) * h.t);
+            weighted += w * returnedRange(world_, h);
+            weights += w;
+          };
+          // The footprint's four corners first: a straight edge through the footprint puts at
+          // least one corner on another surface than the centre's; when none is, the other
+          // sub-rays are not cast (an object narrower than the corners' spacing that lies between
+          // them is missed, like one between two beams).
+          const auto corner = [n](int i, int j) { return (i == 0 || i == n - 1) && (j == 0 || j == n - 1); };
+          for (const int i : {0, n - 1})
+            for (const int j : {0, n - 1}) subRay(i, j);
+          if (step)
+            for (int i = 0; i < n; ++i)
+              for (int j = 0; j < n; ++j)
+                if (!corner(i, j)) subRay(i, j);
           if (step) {
             hit = weights > 0.0 ? static_cast<float>(weighted / weights) : std::numeric_limits<float>::infinity();
             ++mixed;
