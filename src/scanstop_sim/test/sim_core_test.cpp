@@ -738,9 +738,11 @@ uint64_t cloudHash(const PointCloud& c) {
 }
 
 TEST(SimArtifacts, AWorldWithoutMaterialsScansBitForBitAsBefore) {
-  // The hashes were taken with the simulator before materials and mixed pixels existed (main at
-  // 0d89bfe, /tmp/simart/golden.cpp linked against its scanstop_sim_core): thesis profile, seed 7,
-  // the documented start, 100 planes, two scans in a row (the second continues the random sequence).
+  // The hashes were taken with the simulator before materials and mixed pixels existed: a small
+  // program computing cloudHash() as here, linked against main's scanstop_sim_core at 0d89bfe.
+  // Thesis profile, seed 7, the documented start, 100 planes, two scans in a row (the second
+  // continues the random sequence). A change here means every existing scan, test and benchmark
+  // figure changed.
   struct Expected {
     const char* world;
     uint64_t hash[2];
