@@ -1,7 +1,8 @@
 // sim_bench: speed of the simulator's 3D scan against the practical limit of Embree on this machine.
 //
-//   sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R]
-//     For each world (default: the turtlebot3 house from the shared data and worlds/room_10x8.stl),
+//   sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R] [--mixed-pixels]
+//     With --mixed-pixels both simulated scans model mixed pixels (scanner/mixed_pixels, issue #20;
+//     the bare Embree loop stays one ray per beam). For each world (default: the turtlebot3 house from the shared data and worlds/room_10x8.stl),
 //     at the world's documented start pose (or --pose, world frame [m, m, rad]): times Simulator::scan (perfect profile without the
 //     outlier filter = ray casting only; thesis profile with the filter = everything the node
 //     does), a bare Embree loop (rtcIntersect1 per ray, no error model) over exactly the same rays,
@@ -81,7 +82,7 @@ std::vector<Stat> timeInterleaved(int repeat, const std::vector<std::function<vo
 
 int usage(const std::string& why) {
   std::cerr << "sim_bench: " << why << "\n"
-            << "usage: sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R]\n"
+            << "usage: sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R] [--mixed-pixels]\n"
                "       sim_bench --service [--planes N] [--repeat R]   (against a running sim_node)\n";
   return 2;
 }
@@ -145,11 +146,12 @@ size_t bareLoop(RTCScene scene, const Rays& rays, std::vector<float>& ranges) {
   return hits;
 }
 
-int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_text, int planes, int repeat) {
+int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_text, int planes, int repeat,
+                bool mixed_pixels) {
   const int max_threads = omp_get_max_threads();
   std::printf("sim_bench: %d planes x 682 beams = %d rays per scan, median (min) of %d interleaved runs after a warm-up, "
-              "OpenMP threads: 1 and %d\n\n",
-              planes, planes * 682, repeat, max_threads);
+              "OpenMP threads: 1 and %d, mixed pixels %s\n\n",
+              planes, planes * 682, repeat, max_threads, mixed_pixels ? "on" : "off");
   std::printf("%-22s %3s %14s %14s %14s %14s %7s %7s\n", "world", "thr", "bare Embree", "scan perfect",
               "scan thesis", "+PointCloud2", "perf/", "thes/");
   std::printf("%-22s %3s %14s %14s %14s %14s %7s %7s\n", "", "", "[ms]", "(no filter)", "(+filter)",
@@ -162,12 +164,13 @@ int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_
     perfect_cfg.outlier_filter = false;
     SimConfig thesis_cfg;
     thesis_cfg.errors = scanstop::sim::makeProfile("thesis");
+    perfect_cfg.scanner.mixed_pixels = thesis_cfg.scanner.mixed_pixels = mixed_pixels;
     Simulator perfect(World::load(path), perfect_cfg, start);
     Simulator thesis(World::load(path), thesis_cfg, start);
     const Rays rays = makeRays(perfect_cfg.scanner, start, planes);
     std::vector<float> work;
     size_t bare_hits = 0;
-    uint32_t perfect_valid = 0, thesis_valid = 0;
+    uint32_t perfect_valid = 0, thesis_valid = 0, perfect_mixed = 0, perfect_candidates = 0;
     size_t bytes = 0;
     std::string name = path.substr(path.find_last_of('/') + 1);
     for (int threads : {1, max_threads}) {
@@ -194,7 +197,12 @@ int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_
       };
       const std::vector<Stat> t = timeInterleaved(
           repeat, {[&] { bare_hits = bareLoop(perfect.world().scene(), rays, work); },
-                   [&] { perfect_valid = perfect.scan(planes).valid_points; },
+                   [&] {
+                     const scanstop::sim::ScanOutput s = perfect.scan(planes);
+                     perfect_valid = s.valid_points;
+                     perfect_mixed = s.mixed_pixels;
+                     perfect_candidates = s.mixed_pixel_candidates;
+                   },
                    [&] { thesis_valid = thesis.scan(planes).valid_points; }, serviceSide});
       const Stat &bare = t[0], &sp = t[1], &st = t[2], &ser = t[3];
       std::printf("%-22s %3d %7.2f (%4.1f) %7.2f (%4.1f) %7.2f (%4.1f) %7.2f (%4.1f) %7.2f %7.2f\n", name.c_str(),
@@ -220,9 +228,9 @@ int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_
     }
     char buf[256];
     std::snprintf(buf, sizeof(buf), "%s: %zu triangles, start %s; bare hits %zu, valid points perfect %u, thesis %u; "
-                  "response %.1f MB",
+                  "mixed pixels (perfect) %u of %u candidates; response %.1f MB",
                   name.c_str(), perfect.world().mesh().faces.size(), start.toString().c_str(), bare_hits,
-                  perfect_valid, thesis_valid, bytes / 1e6);
+                  perfect_valid, thesis_valid, perfect_mixed, perfect_candidates, bytes / 1e6);
     notes.push_back(buf);
   }
   std::printf("\n");
@@ -269,7 +277,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> worlds;
   std::string pose_text;
   int planes = 400, repeat = 7;
-  bool service = false;
+  bool service = false, mixed_pixels = false;
   std::vector<char*> ros_args{argv[0]};
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -279,6 +287,10 @@ int main(int argc, char** argv) {
     }
     if (arg == "--service") {
       service = true;
+      continue;
+    }
+    if (arg == "--mixed-pixels") {
+      mixed_pixels = true;
       continue;
     }
     if (i + 1 >= argc) return usage("missing value after " + arg);
@@ -297,7 +309,7 @@ int main(int argc, char** argv) {
       return benchService(planes, repeat, n, ros_args.data());
     }
     if (worlds.empty()) worlds = {SCANSTOP_SHARED_DATA_DIR "/worlds/turtlebot3_house.stl", SCANSTOP_WORLDS_DIR "/room_10x8.stl"};
-    return benchWorlds(worlds, pose_text, planes, repeat);
+    return benchWorlds(worlds, pose_text, planes, repeat, mixed_pixels);
   } catch (const std::exception& e) {
     std::cerr << "sim_bench: " << e.what() << "\n";
     return 1;

@@ -30,6 +30,11 @@ void ScannerConfig::validate(const std::string& p) const {
   requireInRange(p + "min_range", min_range_m, 0.0, 1.0, "m");
   requireInRange(p + "max_range", max_range_m, min_range_m + 0.01, 100.0, "m");
   requireInRange(p + "plane_time", plane_time_s, 0.001, 10.0, "s");
+  // The candidates for mixed pixels are found from the neighbouring beams: a footprint wider than
+  // two beam steps would reach past them.
+  requireInRange(p + "beam_divergence", beam_divergence_rad, 1e-4, 4.0 * M_PI / steps_per_turn, "rad");
+  requireInRange(p + "mixed_pixel_threshold", mixed_pixel_threshold_m, 0.005, 1.0, "m");
+  requireInRange(p + "mixed_pixel_samples", mixed_pixel_samples, 2, 8);
   if (first_step < 0 || last_step <= first_step || last_step >= steps_per_turn)
     throw ConfigError(p + "first_step = " + std::to_string(first_step) + ", " + p + "last_step = " +
                       std::to_string(last_step) + ": need 0 <= first_step < last_step < steps_per_turn (" +

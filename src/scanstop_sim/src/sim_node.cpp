@@ -42,6 +42,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   bool allow_no_floor = false;
   ros_params::optional(pnh, "allow_no_floor", allow_no_floor);
   world_options.require_floor = !allow_no_floor;
+  // Surface materials (issue #20): "" takes <world>.materials.yaml next to the STL when it exists.
+  ros_params::optional(pnh, "materials_file", world_options.materials_file);
 
   std::string profile = "thesis";
   ros_params::optional(pnh, "error_profile", profile);
@@ -63,6 +65,10 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "scanner/min_range", sc.min_range_m);
   ros_params::optional(pnh, "scanner/max_range", sc.max_range_m);
   ros_params::optional(pnh, "scanner/plane_time", sc.plane_time_s);
+  ros_params::optional(pnh, "scanner/mixed_pixels", sc.mixed_pixels);
+  ros_params::optional(pnh, "scanner/beam_divergence", sc.beam_divergence_rad);
+  ros_params::optional(pnh, "scanner/mixed_pixel_threshold", sc.mixed_pixel_threshold_m);
+  ros_params::optional(pnh, "scanner/mixed_pixel_samples", sc.mixed_pixel_samples);
   // The selected profile's values from config/sim.yaml (profiles/<name>/sensor|motion/...).
   const std::string pp = "profiles/" + profile + "/";
   SensorNoiseConfig& sn = config.errors.sensor;
@@ -129,6 +135,9 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   Pose2D start;
   try {
     sim_ = makeSimulator(world_path, world_options, config, start_text, pnh.resolveName("start_pose"), &start);
+  } catch (const MaterialsError& e) {
+    throw ConfigError("parameter '" + pnh.resolveName("materials_file") + "' = '" + world_options.materials_file + "'" +
+                      (world_options.materials_file.empty() ? " (the world's own materials file)" : "") + ": " + e.what());
   } catch (const IoError& e) {
     throw ConfigError("parameter '" + pnh.resolveName("world") + "': " + e.what());
   } catch (const std::invalid_argument& e) {
@@ -136,6 +145,20 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   }
   ROS_INFO("sim_node: %s (%zu triangles, %zu floor), start %s, profile %s, seed %d", world_path.c_str(),
            sim_->world().mesh().faces.size(), sim_->world().floorTriangles(), start.toString().c_str(), profile.c_str(), seed);
+  const MaterialMap& materials = sim_->world().materials();
+  const std::vector<size_t> region_triangles = sim_->world().regionCounts();
+  for (size_t r = 0; r < materials.regions.size(); ++r) {
+    const MaterialRegion& m = materials.regions[r];
+    if (region_triangles[r] == 0)
+      ROS_WARN("sim_node: materials %s: region '%s' (%s) contains no triangle's centroid", materials.source.c_str(),
+               m.name.c_str(), materialName(m.material));
+    else
+      ROS_INFO("sim_node: materials %s: region '%s': %zu triangles %s", materials.source.c_str(), m.name.c_str(),
+               region_triangles[r], materialName(m.material));
+  }
+  if (sc.mixed_pixels)
+    ROS_INFO("sim_node: mixed pixels on (footprint %.5f rad, %dx%d sub-rays, depth step %.3f m)", sc.beam_divergence_rad,
+             sc.mixed_pixel_samples, sc.mixed_pixel_samples, sc.mixed_pixel_threshold_m);
   // A restarted sim_node continues the simulation of the one that died (pose, odometry, clock,
   // random sequence): a real robot does not teleport back to its start when its driver restarts.
   ros_params::optional(pnh, "state_file", state_file_);

@@ -41,6 +41,42 @@ std::string num(double v) {
   return buf;
 }
 
+constexpr int kMaxSurfacesPerBeam = 16;     ///< glass panes (faces) a beam passes at most
+constexpr float kPassThroughStep = 1e-4f;   ///< [m] past a glass face before the next intersection
+
+/// The surface that returns a beam: a diffuse or retroreflective surface returns it, an absorbing
+/// one swallows it (no return), glass lets it through (or returns it with its reflect_probability,
+/// drawn from `glass_rng` once per glass region the beam enters). Without materials: the first hit.
+RayHit traceBeam(const World& world, const Eigen::Vector3f& o, const Eigen::Vector3f& d, float tfar,
+                 std::mt19937_64& glass_rng) {
+  float tnear = 0.0f;
+  const MaterialRegion* inside = nullptr;  // the glass region the beam entered last
+  for (int k = 0; k < kMaxSurfacesPerBeam; ++k) {
+    const RayHit h = world.intersect(o, d, tnear, tfar);
+    if (!h.hit()) return h;
+    const MaterialRegion* m = world.materialOf(h.prim);
+    if (!m || m->material == Material::Diffuse || m->material == Material::Retroreflective) return h;
+    if (m->material == Material::Absorbing) return RayHit();
+    // Glass: the pane returns the beam with its probability once, where the beam enters it (not
+    // again at its back face).
+    if (m != inside && m->reflect_probability > 0.0 &&
+        std::uniform_real_distribution<double>(0.0, 1.0)(glass_rng) < m->reflect_probability)
+      return h;
+    inside = m;
+    tnear = h.t + kPassThroughStep;
+  }
+  return RayHit();
+}
+
+/// The noise-free range the sensor reads off a traced hit: its distance, short by the bias on a
+/// retroreflective surface; +inf for no return.
+float returnedRange(const World& world, const RayHit& h) {
+  if (!h.hit()) return std::numeric_limits<float>::infinity();
+  const MaterialRegion* m = world.materialOf(h.prim);
+  if (m && m->material == Material::Retroreflective) return static_cast<float>(h.t - m->bias_m);
+  return h.t;
+}
+
 }  // namespace
 
 std::string checkScanPlanes(long planes) {
@@ -264,6 +300,8 @@ ScanOutput Simulator::scan(int planes) {
   ++scan_counter_;
 
   const Eigen::Isometry3f T_world_base = true_world_.toIsometry3f();
+  const Eigen::Matrix3f R_world_base = T_world_base.linear();
+  const float tfar = static_cast<float>(sc.max_range_m * 1.05);
   // The beam angles within a plane are the same in every plane: their sines and cosines once per
   // scan (ScannerConfig::direction's formula, so the directions are bit for bit the same).
   std::vector<double> beam_sin(beams), beam_cos(beams);
@@ -272,26 +310,129 @@ ScanOutput Simulator::scan(int planes) {
     beam_sin[b] = std::sin(theta);
     beam_cos[b] = std::cos(theta);
   }
-#pragma omp parallel for schedule(dynamic, 4)
+  std::vector<double> plane_cos(planes), plane_sin(planes);
+  std::vector<Eigen::Vector3f> origin_base(planes), origin_world(planes);
   for (int p = 0; p < planes; ++p) {
-    if (lost[p]) continue;
-    std::mt19937_64 rng(scan_seed ^ (0x9E3779B97F4A7C15ull * static_cast<uint64_t>(p + 1)));
-    std::normal_distribution<double> standard_normal(0.0, 1.0);
-    const Eigen::Vector3f o_base = sc.origin(p, planes);
-    const Eigen::Vector3f o_world = T_world_base * o_base;
     const double phi = M_PI * p / planes;
-    const double cos_phi = std::cos(phi), sin_phi = std::sin(phi);
-    for (int b = 0; b < beams; ++b) {
-      const Eigen::Vector3f d_base(static_cast<float>(beam_sin[b] * cos_phi), static_cast<float>(beam_sin[b] * sin_phi),
-                                   static_cast<float>(beam_cos[b]));
-      const Eigen::Vector3f d_world = T_world_base.linear() * d_base;
-      const double hit = world_.castRay(o_world, d_world, static_cast<float>(sc.max_range_m * 1.05));
-      const float r = sampleRange(config_.errors.sensor, sc, static_cast<float>(hit), rng, standard_normal);
-      if (!std::isfinite(r)) continue;
-      const size_t i = static_cast<size_t>(p) * beams + b;
-      cloud.ranges[i] = r;
-      cloud.points[i] = o_base + r * d_base;
+    plane_cos[p] = std::cos(phi);
+    plane_sin[p] = std::sin(phi);
+    origin_base[p] = sc.origin(p, planes);
+    origin_world[p] = T_world_base * origin_base[p];
+  }
+  const auto dirBase = [&](int p, int b) {
+    return Eigen::Vector3f(static_cast<float>(beam_sin[b] * plane_cos[p]), static_cast<float>(beam_sin[b] * plane_sin[p]),
+                           static_cast<float>(beam_cos[b]));
+  };
+  // Random streams per plane, independent of the thread that runs it: the range noise (as before
+  // materials existed), glass reflections of the centre rays, those of mixed-pixel sub-rays.
+  const auto planeRng = [&](uint64_t salt, int p) { return std::mt19937_64(scan_seed ^ (salt * static_cast<uint64_t>(p + 1))); };
+  constexpr uint64_t kNoiseSalt = 0x9E3779B97F4A7C15ull, kGlassSalt = 0xD1B54A32D192ED03ull,
+                     kSubRaySalt = 0x8CB92BA72F3D8DD7ull;
+  const SensorNoiseConfig& noise = config_.errors.sensor;
+  const auto store = [&](int p, int b, float r) {
+    if (!std::isfinite(r)) return;
+    const size_t i = static_cast<size_t>(p) * beams + b;
+    cloud.ranges[i] = r;
+    cloud.points[i] = origin_base[p] + r * dirBase(p, b);
+  };
+
+  if (!sc.mixed_pixels) {
+#pragma omp parallel for schedule(dynamic, 4)
+    for (int p = 0; p < planes; ++p) {
+      if (lost[p]) continue;
+      std::mt19937_64 rng = planeRng(kNoiseSalt, p), glass_rng = planeRng(kGlassSalt, p);
+      std::normal_distribution<double> standard_normal(0.0, 1.0);
+      for (int b = 0; b < beams; ++b) {
+        const Eigen::Vector3f d_world = R_world_base * dirBase(p, b);
+        const float hit = returnedRange(world_, traceBeam(world_, origin_world[p], d_world, tfar, glass_rng));
+        store(p, b, sampleRange(noise, sc, hit, rng, standard_normal));
+      }
     }
+  } else {
+    // Pass 1: the centre ray of every beam. Pass 2: beams whose neighbours (in the plane and in
+    // the planes beside it) lie off their surface's plane get sub-rays over their footprint.
+    std::vector<RayHit> hits(static_cast<size_t>(planes) * beams);
+    std::vector<Eigen::Vector3f> hit_points(hits.size());  // world frame; meaningful where hits[i].hit()
+#pragma omp parallel for schedule(dynamic, 4)
+    for (int p = 0; p < planes; ++p) {
+      if (lost[p]) continue;
+      std::mt19937_64 glass_rng = planeRng(kGlassSalt, p);
+      for (int b = 0; b < beams; ++b) {
+        const size_t i = static_cast<size_t>(p) * beams + b;
+        const Eigen::Vector3f d_world = R_world_base * dirBase(p, b);
+        hits[i] = traceBeam(world_, origin_world[p], d_world, tfar, glass_rng);
+        hit_points[i] = origin_world[p] + hits[i].t * d_world;
+      }
+    }
+    const float threshold = static_cast<float>(sc.mixed_pixel_threshold_m);
+    const int n = sc.mixed_pixel_samples;
+    uint32_t mixed = 0, candidates = 0;
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : mixed, candidates)
+    for (int p = 0; p < planes; ++p) {
+      if (lost[p]) continue;
+      std::mt19937_64 rng = planeRng(kNoiseSalt, p), sub_rng = planeRng(kSubRaySalt, p);
+      std::normal_distribution<double> standard_normal(0.0, 1.0);
+      for (int b = 0; b < beams; ++b) {
+        const RayHit& c = hits[static_cast<size_t>(p) * beams + b];
+        const Eigen::Vector3f& c_point = hit_points[static_cast<size_t>(p) * beams + b];
+        // Another surface than the centre's: a return where it has none (or the reverse), or a
+        // point more than the threshold off its plane (a plane seen at grazing incidence is one surface).
+        const auto otherSurface = [&](const RayHit& h, const Eigen::Vector3f& point) {
+          if (h.hit() != c.hit()) return true;
+          return h.hit() && std::abs((point - c_point).dot(world_.faceNormal(c.prim))) > threshold;
+        };
+        bool candidate = false;
+        const int nq[4] = {p, p, p - 1, p + 1}, nb[4] = {b - 1, b + 1, b, b};
+        for (int k = 0; k < 4 && !candidate; ++k) {
+          if (nq[k] < 0 || nq[k] >= planes || nb[k] < 0 || nb[k] >= beams || lost[nq[k]]) continue;
+          const size_t i = static_cast<size_t>(nq[k]) * beams + nb[k];
+          candidate = otherSurface(hits[i], hit_points[i]);
+        }
+        float hit = returnedRange(world_, c);
+        if (candidate) {
+          ++candidates;
+          // n x n sub-rays over the square footprint (angular offsets in the plane and across it).
+          const Eigen::Vector3f d = dirBase(p, b);
+          const Eigen::Vector3f t_in(static_cast<float>(beam_cos[b] * plane_cos[p]),
+                                     static_cast<float>(beam_cos[b] * plane_sin[p]), static_cast<float>(-beam_sin[b]));
+          const Eigen::Vector3f t_across(static_cast<float>(-plane_sin[p]), static_cast<float>(plane_cos[p]), 0.0f);
+          bool step = false;
+          double weighted = 0.0, weights = 0.0;
+          const auto subRay = [&](int i, int j) {
+            const double a = std::tan(((i + 0.5) / n - 0.5) * sc.beam_divergence_rad);
+            const double e = std::tan(((j + 0.5) / n - 0.5) * sc.beam_divergence_rad);
+            const Eigen::Vector3f sub =
+                R_world_base * (d + static_cast<float>(a) * t_in + static_cast<float>(e) * t_across).normalized();
+            const RayHit h = traceBeam(world_, origin_world[p], sub, tfar, sub_rng);
+            step = step || otherSurface(h, origin_world[p] + h.t * sub);
+            if (!h.hit()) return;
+            // Each sub-ray stands for an equal share of the footprint; the power a surface
+            // returns falls with the square of its distance.
+            const double w = 1.0 / (static_cast<double>(h.t) * h.t);
+            weighted += w * returnedRange(world_, h);
+            weights += w;
+          };
+          // The footprint's four corners first: a straight edge through the footprint puts at
+          // least one corner on another surface than the centre's; when none is, the other
+          // sub-rays are not cast (an object narrower than the corners' spacing that lies between
+          // them is missed, like one between two beams).
+          const auto corner = [n](int i, int j) { return (i == 0 || i == n - 1) && (j == 0 || j == n - 1); };
+          for (const int i : {0, n - 1})
+            for (const int j : {0, n - 1}) subRay(i, j);
+          if (step)
+            for (int i = 0; i < n; ++i)
+              for (int j = 0; j < n; ++j)
+                if (!corner(i, j)) subRay(i, j);
+          if (step) {
+            hit = weights > 0.0 ? static_cast<float>(weighted / weights) : std::numeric_limits<float>::infinity();
+            ++mixed;
+          }
+        }
+        store(p, b, sampleRange(noise, sc, hit, rng, standard_normal));
+      }
+    }
+    out.mixed_pixels = mixed;
+    out.mixed_pixel_candidates = candidates;
   }
   for (int p = 0; p < planes; ++p) out.planes_dropped += lost[p];
   if (config_.outlier_filter) out.outliers_removed = static_cast<uint32_t>(filterOutliers(cloud));

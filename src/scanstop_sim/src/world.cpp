@@ -1,5 +1,8 @@
 #include "scanstop_sim/world.h"
 
+#include <sys/stat.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -57,7 +60,37 @@ World::~World() = default;
 RTCScene World::scene() const { return embree_->scene; }
 
 World World::load(const std::string& path, const WorldOptions& options) {
-  return fromMesh(readStl(path), path, options);
+  WorldOptions o = options;
+  if (o.materials_file.empty()) {
+    // The materials file next to the STL, when there is one.
+    const std::string sibling = materialsPathFor(path);
+    struct stat st;
+    if (::stat(sibling.c_str(), &st) == 0) o.materials_file = sibling;
+  }
+  return fromMesh(readStl(path), path, o);
+}
+
+void World::setMaterials(const MaterialMap& materials) {
+  materials_ = materials;
+  face_region_.clear();
+  if (materials_.regions.empty()) return;
+  face_region_.assign(mesh_.faces.size(), -1);
+  for (size_t f = 0; f < mesh_.faces.size(); ++f) {
+    const Eigen::Vector3d c = ((mesh_.vertices[mesh_.faces[f][0]] + mesh_.vertices[mesh_.faces[f][1]] +
+                                mesh_.vertices[mesh_.faces[f][2]]) / 3.0f).cast<double>();
+    for (size_t r = 0; r < materials_.regions.size(); ++r)
+      if (materials_.regions[r].contains(c)) {
+        face_region_[f] = static_cast<int>(r);
+        break;
+      }
+  }
+}
+
+std::vector<size_t> World::regionCounts() const {
+  std::vector<size_t> counts(materials_.regions.size(), 0);
+  for (const int r : face_region_)
+    if (r >= 0) ++counts[static_cast<size_t>(r)];
+  return counts;
 }
 
 World World::fromMesh(const TriangleMesh& mesh, const std::string& name, const WorldOptions& options) {
@@ -102,6 +135,13 @@ World World::fromMesh(const TriangleMesh& mesh, const std::string& name, const W
   rtcReleaseGeometry(geom);
   rtcCommitScene(w.embree_->scene);
   w.buildObstacleMap(options);
+  w.face_normals_.resize(mesh.faces.size());
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Eigen::Vector3f& a = mesh.vertices[mesh.faces[f][0]];
+    const Eigen::Vector3f n = (mesh.vertices[mesh.faces[f][1]] - a).cross(mesh.vertices[mesh.faces[f][2]] - a);
+    w.face_normals_[f] = n.norm() > 0.0f ? Eigen::Vector3f(n.normalized()) : Eigen::Vector3f::Zero();
+  }
+  if (!options.materials_file.empty()) w.setMaterials(loadMaterials(options.materials_file));
   return w;
 }
 
@@ -188,6 +228,12 @@ double World::clearance(const Eigen::Vector2d& p) const {
 }
 
 double World::castRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float max_range) const {
+  const RayHit h = intersect(origin, direction, 0.0f, max_range);
+  return h.hit() ? h.t : std::numeric_limits<double>::infinity();
+}
+
+RayHit World::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float tnear,
+                        float tfar) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh;
@@ -197,15 +243,20 @@ double World::castRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& dire
   rh.ray.dir_x = direction.x();
   rh.ray.dir_y = direction.y();
   rh.ray.dir_z = direction.z();
-  rh.ray.tnear = 0.0f;
-  rh.ray.tfar = max_range;
+  rh.ray.tnear = tnear;
+  rh.ray.tfar = tfar;
   rh.ray.mask = 0xFFFFFFFFu;
   rh.ray.flags = 0;
   rh.ray.time = 0.0f;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(embree_->scene, &context, &rh);
-  return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? std::numeric_limits<double>::infinity() : rh.ray.tfar;
+  RayHit h;
+  if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+    h.t = rh.ray.tfar;
+    h.prim = rh.hit.primID;
+  }
+  return h;
 }
 
 void World::castRays(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen::Vector3f>& directions,

@@ -73,6 +73,14 @@ class BadParameters(unittest.TestCase):
     def test_equal_frames(self):
         self.check(12, [('odom_frame', 'base_link')], "odom_frame' and", "base_frame' are both 'base_link'")
 
+    def test_missing_materials_file(self):
+        self.check(14, [('materials_file', '/nonexistent/room.materials.yaml')], "materials_file' = '/nonexistent/room.materials.yaml'",
+                   "/nonexistent/room.materials.yaml: cannot read the materials file")
+
+    def test_mixed_pixel_samples_out_of_range(self):
+        self.check(15, [('scanner/mixed_pixels', 'true'), ('scanner/mixed_pixel_samples', '1')],
+                   "'scanner/mixed_pixel_samples' = 1 is out of range [2, 8]")
+
     def test_missing_world(self):
         rc, out = self.run_node(13, [])
         self.assertNotEqual(rc, 0, out)

@@ -2,6 +2,8 @@
 // an analytic box room, the sensor and motion error models' statistics, collisions, world checks.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <numeric>
 
@@ -357,6 +359,15 @@ TEST(Worlds, CommittedWorldsEqualAFreshBuildAndTheirStartsAreFree) {
     writeStlBinary(tmp, spec.mesh);
     EXPECT_EQ(readFile(tmp), readFile(path)) << spec.name << ": worlds/ is out of date; run make_worlds";
     std::remove(tmp);
+    // Its materials file, when it has one (and none when it has none).
+    const std::string materials = materialsPathFor(path);
+    if (spec.materials_yaml.empty()) {
+      EXPECT_FALSE(w.hasMaterials()) << spec.name;
+    } else {
+      ASSERT_TRUE(w.hasMaterials()) << spec.name << ": " << materials << " is missing; run make_worlds";
+      EXPECT_EQ(readFile(materials), spec.materials_yaml) << spec.name << ": " << materials << " is out of date";
+      for (const size_t n : w.regionCounts()) EXPECT_GT(n, 0u) << spec.name << ": a region without triangles";
+    }
   }
 }
 
@@ -700,6 +711,284 @@ TEST(SimSetup, AStateOfAnotherWorldIsTypedSoSimNodeRefusesInsteadOfOverwritingIt
   Simulator room_elsewhere(World::fromMesh(b.mesh(), "/other/checkout/room_10x8.stl"), SimConfig(), Pose2D(0, 0, 0));
   EXPECT_THROW(corridor.restoreState(room.saveState()), StateOfAnotherWorld);
   EXPECT_NO_THROW(room_elsewhere.restoreState(room.saveState()));  // the same world from another checkout
+}
+
+}  // namespace
+}  // namespace sim
+}  // namespace scanstop
+
+// Scanner artifacts (issue #20, thesis chapter 8): surface materials and mixed pixels.
+namespace scanstop {
+namespace sim {
+namespace {
+
+/// FNV-1a over the cloud's ranges and points (the bytes: NaN patterns included).
+uint64_t cloudHash(const PointCloud& c) {
+  uint64_t h = 1469598103934665603ull;
+  const auto add = [&](const void* data, size_t n) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < n; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ull;
+    }
+  };
+  add(c.ranges.data(), c.ranges.size() * sizeof(float));
+  for (const auto& p : c.points) add(p.data(), 3 * sizeof(float));
+  return h;
+}
+
+TEST(SimArtifacts, AWorldWithoutMaterialsScansBitForBitAsBefore) {
+  // The hashes were taken with the simulator before materials and mixed pixels existed: a small
+  // program computing cloudHash() as here, linked against main's scanstop_sim_core at 0d89bfe.
+  // Thesis profile, seed 7, the documented start, 100 planes, two scans in a row (the second
+  // continues the random sequence). A change here means every existing scan, test and benchmark
+  // figure changed.
+  struct Expected {
+    const char* world;
+    uint64_t hash[2];
+    uint32_t valid[2];
+  };
+  for (const Expected& e : {Expected{"room_10x8", {0xce7887cefe5feca0ull, 0xa30ee4a3f0c7eeedull}, {60690, 60107}},
+                            Expected{"corridor", {0xb06f90650f7cc61eull, 0xef0403862e0881e6ull}, {64032, 63534}}}) {
+    SimConfig config;
+    config.errors = makeProfile("thesis");
+    config.seed = 7;
+    Simulator sim(World::load(std::string(SCANSTOP_WORLDS_DIR) + "/" + e.world + ".stl"), config,
+                  defaultStartPose(e.world));
+    ASSERT_FALSE(sim.world().hasMaterials()) << e.world << " has a materials file";
+    for (int k = 0; k < 2; ++k) {
+      const ScanOutput s = sim.scan(100);
+      EXPECT_EQ(s.valid_points, e.valid[k]) << e.world << " scan " << k;
+      EXPECT_EQ(cloudHash(s.cloud), e.hash[k]) << e.world << " scan " << k;
+      EXPECT_EQ(s.mixed_pixels, 0u);
+    }
+  }
+}
+
+/// A 5 x 6 m box room (walls at x = -1 and x = 4, y = -3 and y = 3, 2.5 m high) with a box at
+/// x in [2, 2.5], y in [y0, 1.5], z in [0, 1]; the robot at the origin looking along +x: beam 596 of
+/// plane 0 is horizontal along +x at y = 0 (z = 0.45) and meets the box's face at 2 m or the wall at 4 m.
+TriangleMesh roomWithBox(double y0) {
+  WorldBuilder b(2.5);
+  b.floorAndCeiling(-1, -3, 4, 3);
+  b.box({-1.1, -3, 0}, {-1, 3, 2.5});
+  b.box({4, -3, 0}, {4.1, 3, 2.5});
+  b.box({-1.1, -3.1, 0}, {4.1, -3, 2.5});
+  b.box({-1.1, 3, 0}, {4.1, 3.1, 2.5});
+  b.box({2.0, y0, 0.0}, {2.5, 1.5, 1.0});
+  return b.mesh();
+}
+constexpr int kAlongX = 640 - 44;  // beam index of step 640 (+90 deg from up: horizontal, +x in plane 0)
+
+SimConfig noiseFree() {
+  SimConfig c;
+  c.errors = makeProfile("perfect");
+  c.outlier_filter = false;
+  return c;
+}
+
+TEST(SimArtifacts, ABeamGrazingABoxEdgeReadsAMixedRange) {
+  // The box's edge 3 mm beside the beam: the centre ray passes it and meets the wall at 4 m; a
+  // quarter of the 4 x 4 sub-rays (those at +4.6 mm) meet the box at 2 m.
+  SimConfig off = noiseFree();
+  SimConfig on = off;
+  on.scanner.mixed_pixels = true;
+  Simulator a(World::fromMesh(roomWithBox(0.003), "edge"), off, Pose2D());
+  Simulator b(World::fromMesh(roomWithBox(0.003), "edge"), on, Pose2D());
+  const ScanOutput s_off = a.scan(50), s_on = b.scan(50);
+  EXPECT_NEAR(s_off.cloud.ranges[kAlongX], 4.0, 1e-4);  // without mixed pixels: the wall behind
+  const float mixed = s_on.cloud.ranges[kAlongX];
+  EXPECT_GT(mixed, 2.1f);
+  EXPECT_LT(mixed, 3.9f);
+  // 4 sub-rays at 2 m and 12 at 4 m, each weighted by its share and 1 / range^2 (returned power).
+  EXPECT_NEAR(mixed, (4 * 2.0 / 4.0 + 12 * 4.0 / 16.0) / (4 / 4.0 + 12 / 16.0), 0.01);
+  // Only beams at depth steps change: the box's outline, a small share of the scan.
+  size_t changed = 0;
+  for (size_t i = 0; i < s_on.cloud.size(); ++i) {
+    const float r0 = s_off.cloud.ranges[i], r1 = s_on.cloud.ranges[i];
+    if (!(std::isnan(r0) && std::isnan(r1)) && r0 != r1) ++changed;
+  }
+  EXPECT_GT(changed, 10u);
+  EXPECT_LE(changed, s_on.mixed_pixels);
+  EXPECT_LT(s_on.mixed_pixels, s_on.cloud.size() / 50);
+}
+
+TEST(SimArtifacts, WithoutADepthStepOnlyConcaveCornersAreMixedSlightly) {
+  // An empty box room: thousands of beams meet the walls and the floor at grazing incidence (one
+  // surface each: not mixed); only where the footprint of a beam that grazes the floor reaches the
+  // wall (a concave corner) are two surfaces mixed, and then by less than the range noise there.
+  SimConfig on = noiseFree();
+  on.scanner.mixed_pixels = true;
+  Simulator a(World::fromMesh(boxRoom(-1, -3, 4, 3, 2.5), "room"), noiseFree(), Pose2D(0.3, 0.2, 0.4));
+  Simulator b(World::fromMesh(boxRoom(-1, -3, 4, 3, 2.5), "room"), on, Pose2D(0.3, 0.2, 0.4));
+  const ScanOutput s_off = a.scan(100), s_on = b.scan(100);
+  size_t changed = 0;
+  for (size_t i = 0; i < s_on.cloud.size(); ++i) {
+    const float r0 = s_off.cloud.ranges[i], r1 = s_on.cloud.ranges[i];
+    if (std::isnan(r0) && std::isnan(r1)) continue;
+    ASSERT_TRUE(std::isfinite(r0) && std::isfinite(r1)) << "plane " << i / 682 << " beam " << i % 682;
+    if (r0 == r1) continue;
+    ++changed;
+    EXPECT_LT(std::abs(r1 - r0), 0.01 * r0) << "plane " << i / 682 << " beam " << i % 682;
+  }
+  EXPECT_EQ(changed, s_on.mixed_pixels);
+  EXPECT_LT(s_on.mixed_pixels, 30u);  // of 68,200 beams (8 at this pose)
+}
+
+World worldWithMaterial(const std::string& yaml) {
+  World w = World::fromMesh(roomWithBox(-1.0), "box");
+  w.setMaterials(parseMaterials(yaml, "test.materials.yaml"));
+  return w;
+}
+
+std::string boxRegion(const std::string& material, const std::string& extra = "") {
+  // The box's triangles (centroids above the floor and inside it), not the floor's or the walls'.
+  return "regions:\n  - name: box\n    material: " + material + "\n    min: [1.9, -1.1, 0.01]\n    max: [2.6, 1.6, 1.1]\n" +
+         extra;
+}
+
+float beamAlongX(World world, const SimConfig& config = noiseFree()) {
+  Simulator sim(std::move(world), config, Pose2D());
+  return sim.scan(50).cloud.ranges[kAlongX];
+}
+
+TEST(SimArtifacts, MaterialsChangeWhatTheBeamReads) {
+  EXPECT_NEAR(beamAlongX(World::fromMesh(roomWithBox(-1.0), "box")), 2.0, 1e-4);  // no materials: the box
+  EXPECT_NEAR(beamAlongX(worldWithMaterial(boxRegion("diffuse"))), 2.0, 1e-4);
+  // Retroreflective: short by the bias (default 0.10 m, as the thesis measured at the table leg).
+  EXPECT_NEAR(beamAlongX(worldWithMaterial(boxRegion("retroreflective"))), 1.9, 1e-4);
+  EXPECT_NEAR(beamAlongX(worldWithMaterial(boxRegion("retroreflective", "    bias_m: 0.25\n"))), 1.75, 1e-4);
+  // Absorbing: no return (the LCD monitor).
+  EXPECT_TRUE(std::isnan(beamAlongX(worldWithMaterial(boxRegion("absorbing")))));
+  // Glass: through both faces of the box to the wall behind; or the pane itself when it reflects.
+  EXPECT_NEAR(beamAlongX(worldWithMaterial(boxRegion("glass"))), 4.0, 1e-4);
+  EXPECT_NEAR(beamAlongX(worldWithMaterial(boxRegion("glass", "    reflect_probability: 1.0\n"))), 2.0, 1e-4);
+  // With reflect_probability 0.3 about 30 % of the box's beams return the pane (drawn once where
+  // the beam enters it, not again at its back face: 1 - 0.7^2 = 51 % otherwise).
+  Simulator sim(worldWithMaterial(boxRegion("glass", "    reflect_probability: 0.3\n")), noiseFree(), Pose2D());
+  int pane = 0, behind = 0;
+  for (int k = 0; k < 20; ++k) {
+    const ScanOutput s = sim.scan(50);
+    for (int b = kAlongX - 20; b <= kAlongX + 20; ++b) {
+      const float r = s.cloud.ranges[b];  // plane 0: straight ahead, the box's face at 2 m / cos
+      (r < 3.0f ? pane : behind) += 1;
+    }
+  }
+  EXPECT_NEAR(pane / double(pane + behind), 0.3, 0.06);
+  // The robot still bumps into what the laser cannot see (the 2D obstacle map is the geometry).
+  EXPECT_TRUE(worldWithMaterial(boxRegion("glass")).discCollides(Eigen::Vector2d(1.9, 0.0), 0.26));
+  EXPECT_TRUE(worldWithMaterial(boxRegion("absorbing")).discCollides(Eigen::Vector2d(1.9, 0.0), 0.26));
+}
+
+TEST(SimArtifacts, ATriangleTakesTheFirstRegionContainingItsCentroid) {
+  const World w = worldWithMaterial(boxRegion("absorbing") + "  - material: retroreflective\n    min: [-10, -10, -1]\n    max: [10, 10, 10]\n");
+  const std::vector<size_t> counts = w.regionCounts();
+  ASSERT_EQ(counts.size(), 2u);
+  EXPECT_EQ(counts[0], 10u);  // the box: 6 faces, 2 triangles each, but its bottom's centroids lie below z = 0.01
+  EXPECT_EQ(counts[0] + counts[1], w.mesh().faces.size());
+  EXPECT_TRUE(std::isnan(beamAlongX(
+      worldWithMaterial(boxRegion("absorbing") + "  - material: retroreflective\n    min: [-10, -10, -1]\n    max: [10, 10, 10]\n"))));
+}
+
+std::string materialsError(const std::string& yaml) {
+  try {
+    parseMaterials(yaml, "room.materials.yaml");
+  } catch (const MaterialsError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(SimArtifacts, MaterialsFileErrorsNameTheFileTheEntryAndTheProblem) {
+  const std::string ok = boxRegion("diffuse");
+  EXPECT_EQ(materialsError(ok), "accepted");
+  const std::string leg = "  - name: leg\n    material: retroreflective\n    min: [0, 0, 0]\n    max: [1, 1, 1]\n";
+  const auto has = [](const std::string& msg, const std::vector<std::string>& parts) {
+    for (const auto& p : parts)
+      if (msg.find(p) == std::string::npos) return ::testing::AssertionFailure() << "'" << msg << "' lacks '" << p << "'";
+    return ::testing::AssertionSuccess();
+  };
+  EXPECT_TRUE(has(materialsError(ok + "  - name: leg\n    material: shiny\n    min: [0, 0, 0]\n    max: [1, 1, 1]\n"),
+                  {"room.materials.yaml", "entry 2", "'leg'", "unknown material 'shiny'", "retroreflective"}));
+  EXPECT_TRUE(has(materialsError(ok + "  - name: leg\n    material: glass\n    min: [0, 2, 0]\n    max: [1, 1, 1]\n"),
+                  {"room.materials.yaml", "entry 2", "'leg'", "min [0, 2, 0] > max [1, 1, 1] in y"}));
+  EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    min: [0, .nan, 0]\n    max: [1, 1, 1]\n"),
+                  {"room.materials.yaml", "entry 1", "'min'[1]", "not finite"}));
+  EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    min: [0, 0]\n    max: [1, 1, 1]\n"),
+                  {"entry 1", "'min'", "three numbers"}));
+  EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    max: [1, 1, 1]\n"), {"entry 1", "'min' is missing"}));
+  EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    min: [0, 0, 0]\n    max: [1, 1, abc]\n"),
+                  {"entry 1", "'max'[2]", "not a number"}));
+  EXPECT_TRUE(has(materialsError("regions:\n" + leg + "    bias: 0.1\n"), {"'leg'", "unknown key 'bias'"}));
+  EXPECT_TRUE(has(materialsError("regions:\n" + leg + "    bias_m: 2\n"), {"'leg'", "'bias_m' = 2 m is out of range [0, 1] m"}));
+  EXPECT_TRUE(has(materialsError("regions:\n" + leg + "    reflect_probability: 0.5\n"),
+                  {"'leg'", "'reflect_probability'", "glass regions only", "retroreflective"}));
+  EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    min: [0, 0, 0]\n    max: [1, 1, 1]\n    reflect_probability: 1.5\n"),
+                  {"entry 1", "'reflect_probability' = 1.5 is out of range [0, 1]"}));
+  EXPECT_TRUE(has(materialsError("regions:\n  - min: [0, 0, 0]\n    max: [1, 1, 1]\n"), {"entry 1", "'material' is missing"}));
+  EXPECT_TRUE(has(materialsError("surfaces: []\n"), {"room.materials.yaml", "no 'regions' list"}));
+  EXPECT_TRUE(has(materialsError("regions: [unclosed\n"), {"room.materials.yaml", "not valid YAML"}));
+  try {
+    loadMaterials("/nonexistent/room.materials.yaml");
+    FAIL() << "a missing materials file must be refused";
+  } catch (const MaterialsError& e) {
+    EXPECT_TRUE(has(e.what(), {"/nonexistent/room.materials.yaml", "cannot read"}));
+  }
+  EXPECT_EQ(materialsPathFor("worlds/room_10x8.stl"), "worlds/room_10x8.materials.yaml");
+  EXPECT_EQ(materialsPathFor("a.b/world"), "a.b/world.materials.yaml");
+}
+
+TEST(SimArtifacts, AWorldLoadsTheMaterialsFileNextToItsStl) {
+  char dir[] = "/tmp/scanstop_materials_XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string stl = std::string(dir) + "/box.stl";
+  writeStlBinary(stl, roomWithBox(-1.0));
+  EXPECT_FALSE(World::load(stl).hasMaterials());
+  writeFileAtomic(std::string(dir) + "/box.materials.yaml", boxRegion("absorbing"));
+  const World w = World::load(stl);
+  ASSERT_TRUE(w.hasMaterials());
+  EXPECT_EQ(w.regionCounts(), std::vector<size_t>{10u});
+  EXPECT_TRUE(std::isnan(beamAlongX(World::load(stl))));
+  // An explicit file replaces it; a missing one is an error naming it.
+  writeFileAtomic(std::string(dir) + "/other.yaml", boxRegion("retroreflective"));
+  WorldOptions o;
+  o.materials_file = std::string(dir) + "/other.yaml";
+  EXPECT_NEAR(beamAlongX(World::load(stl, o)), 1.9, 1e-4);
+  o.materials_file = std::string(dir) + "/missing.yaml";
+  EXPECT_THROW(World::load(stl, o), MaterialsError);
+  // A broken file next to the world stops the load, naming the file.
+  writeFileAtomic(std::string(dir) + "/box.materials.yaml", boxRegion("velvet"));
+  try {
+    World::load(stl);
+    FAIL() << "a broken materials file must be refused";
+  } catch (const MaterialsError& e) {
+    EXPECT_NE(std::string(e.what()).find("box.materials.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown material 'velvet'"), std::string::npos) << e.what();
+  }
+  for (const char* f : {"/box.stl", "/box.materials.yaml", "/other.yaml"}) std::remove((std::string(dir) + f).c_str());
+  rmdir(dir);
+}
+
+TEST(SimArtifacts, MixedPixelParametersAreValidatedByName) {
+  auto message = [](const SimConfig& c) {
+    try {
+      c.validate("");
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  SimConfig c;
+  c.scanner.mixed_pixels = true;
+  EXPECT_EQ(message(c), "");
+  c.scanner.beam_divergence_rad = 0.1;
+  EXPECT_NE(message(c).find("'scanner/beam_divergence' = 0.1 rad"), std::string::npos) << message(c);
+  c = SimConfig();
+  c.scanner.mixed_pixel_threshold_m = std::nan("");
+  EXPECT_NE(message(c).find("'scanner/mixed_pixel_threshold' = nan"), std::string::npos) << message(c);
+  c = SimConfig();
+  c.scanner.mixed_pixel_samples = 1;
+  EXPECT_NE(message(c).find("'scanner/mixed_pixel_samples' = 1"), std::string::npos) << message(c);
 }
 
 }  // namespace

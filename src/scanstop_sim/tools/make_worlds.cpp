@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
 #include "scanstop_common/options.h"
 #include "scanstop_common/stl_io.h"
 #include "scanstop_sim/world_builder.h"
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
     for (const auto& w : worlds) {
       const std::string path = out_dir + "/" + w.name + ".stl";
       scanstop::writeStlBinary(path, w.mesh);
+      if (!w.materials_yaml.empty()) scanstop::writeFileAtomic(out_dir + "/" + w.name + ".materials.yaml", w.materials_yaml);
       std::printf("%-12s %5.1f x %4.1f m  %6zu triangles  start (%.2f, %.2f, %.2f rad)  %s\n", w.name.c_str(),
                   w.size_m.x(), w.size_m.y(), w.mesh.faces.size(), w.start.x, w.start.y, w.start.yaw, path.c_str());
     }

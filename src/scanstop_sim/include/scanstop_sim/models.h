@@ -4,6 +4,7 @@
 /// with defaults; units in the names.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <random>
 #include <string>
 
@@ -28,6 +29,13 @@ struct ScannerConfig {
   double min_range_m = 0.02;       ///< DMIN
   double max_range_m = 5.6;        ///< DMAX
   double plane_time_s = 0.1;       ///< time per plane (66.7 ms scan + 33.3 ms return)
+  // Mixed pixels (thesis ch. 8, issue #20): a beam has a square footprint beam_divergence wide (in
+  // the scan plane and across it); where the footprint covers surfaces at different depths, the
+  // reading is their mix. Off by default: it changes the clouds, hence mission results.
+  bool mixed_pixels = false;
+  double beam_divergence_rad = 2.0 * M_PI / 1024.0;  ///< full width of the footprint [rad]; default one beam step
+  double mixed_pixel_threshold_m = 0.05;  ///< a sub-ray's hit this far off the centre's surface plane is a depth step [m]
+  int mixed_pixel_samples = 4;            ///< sub-rays per footprint axis (n x n sub-rays at a step)
 
   int beams() const { return last_step - first_step + 1; }
   /// Unit direction of beam `beam` (0-based) in plane `plane` of `planes`, in base_link.

@@ -60,6 +60,8 @@ struct ScanOutput {
   uint32_t valid_points = 0;
   uint32_t planes_dropped = 0;
   uint32_t outliers_removed = 0;
+  uint32_t mixed_pixels = 0;      ///< readings mixed from surfaces at different depths (scanner.mixed_pixels)
+  uint32_t mixed_pixel_candidates = 0;  ///< beams that cast sub-rays (a neighbour off their surface)
   double duration_s = 0.0;        ///< modelled
 };
 

@@ -7,11 +7,13 @@
 #include <embree3/rtcore.h>
 
 #include <Eigen/Core>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "scanstop_common/cloud.h"
+#include "scanstop_sim/materials.h"
 
 namespace scanstop {
 namespace sim {
@@ -22,6 +24,18 @@ struct WorldOptions {
   double floor_tolerance_m = 0.01;    ///< |z| below which a horizontal triangle counts as floor
   double obstacle_min_z_m = 0.03;     ///< geometry above this height blocks the robot (thresholds, carpets below) [m]
   double obstacle_max_z_m = 0.60;     ///< ... and below this height (the robot's height) [m]
+  /// The world's surface materials (materials.h). Empty: World::load takes `<world>.materials.yaml`
+  /// next to the STL when that file exists (every surface diffuse otherwise); fromMesh none. A
+  /// path: that file, which must exist.
+  std::string materials_file;
+};
+
+/// The first surface along a ray.
+struct RayHit {
+  static constexpr unsigned kNone = 0xFFFFFFFFu;
+  float t = std::numeric_limits<float>::infinity();  ///< distance along the unit direction [m]
+  unsigned prim = kNone;                              ///< the triangle's index in mesh().faces
+  bool hit() const { return prim != kNone; }
 };
 
 /// A convex 2D polygon of the obstacle map (a triangle's part in the robot's height band, seen
@@ -43,6 +57,9 @@ class World {
   /// Distance [m] along the unit direction to the first surface, or +inf when nothing is hit
   /// within max_range.
   double castRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float max_range) const;
+  /// The first surface hit at a distance in [tnear, tfar] along the unit direction, with the
+  /// triangle it belongs to (Embree's primID); castRay(o, d, r) == intersect(o, d, 0, r).t.
+  RayHit intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float tnear, float tfar) const;
   /// Casts many rays (parallel); ranges[i] = +inf for a miss.
   void castRays(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen::Vector3f>& directions,
                 float max_range, std::vector<float>& ranges) const;
@@ -54,6 +71,22 @@ class World {
   /// clearance(p), searched only out to max_m (the obstacle grid's cells near p): max_m when no
   /// obstacle is closer [m].
   double clearanceWithin(const Eigen::Vector2d& p, double max_m) const;
+
+  /// Assigns every triangle the material of the first region containing its centroid (diffuse
+  /// when none does); replaces earlier materials.
+  void setMaterials(const MaterialMap& materials);
+  const MaterialMap& materials() const { return materials_; }
+  bool hasMaterials() const { return !face_region_.empty(); }
+  /// The region triangle `prim` belongs to, or nullptr (diffuse).
+  const MaterialRegion* materialOf(unsigned prim) const {
+    if (face_region_.empty() || prim >= face_region_.size()) return nullptr;
+    const int r = face_region_[prim];
+    return r < 0 ? nullptr : &materials_.regions[static_cast<size_t>(r)];
+  }
+  /// Number of triangles in each region of materials() (a region with none is likely a typo).
+  std::vector<size_t> regionCounts() const;
+  /// Unit normal of triangle `prim` (zero for a degenerate one).
+  const Eigen::Vector3f& faceNormal(unsigned prim) const { return face_normals_[prim]; }
 
   const TriangleMesh& mesh() const { return mesh_; }
   const std::string& name() const { return name_; }
@@ -75,6 +108,9 @@ class World {
   std::string name_;
   Eigen::Vector3f min_, max_;
   size_t floor_triangles_ = 0;
+  std::vector<Eigen::Vector3f> face_normals_;
+  MaterialMap materials_;
+  std::vector<int> face_region_;  ///< per triangle: index into materials_.regions, -1 diffuse; empty: all diffuse
   double distanceTo(const Polygon2D& poly, const Eigen::Vector2d& p) const;
 
   // Obstacle map: convex polygons in a uniform grid of cells.

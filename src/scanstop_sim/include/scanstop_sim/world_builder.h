@@ -80,11 +80,13 @@ struct WorldSpec {
   Eigen::Vector2d size_m;   ///< outer footprint
   Pose2D start;             ///< documented start pose (world frame)
   TriangleMesh mesh;
+  std::string materials_yaml;  ///< the world's <name>.materials.yaml (materials.h); empty: none
 };
 
 /// room_10x8 (thesis chapter 8), office_loop, corridor, office_large (a 50 x 40 m office floor:
 /// corridors with two loops, rooms on both sides, an open-plan area, furniture) and the furnished
-/// worlds furnished_1..3 (furnishedWorld with seeds 1..3).
+/// worlds furnished_1..3 (furnishedWorld with seeds 1..3), and artifacts_room (the thesis' scanner
+/// artifacts of chapter 8: a table with a retroreflective leg and an absorbing monitor, a door).
 std::vector<WorldSpec> buildWorlds();
 
 /// A furnished flat of four to six rooms, generated from `seed` (the same seed gives the same
