@@ -18,6 +18,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/map_dir.h"
+#include "scanstop_mesher/mesh_analysis.h"
 
 namespace scanstop {
 namespace mesher {
@@ -106,6 +107,7 @@ void FusedMapConfig::validate() const {
   requireInRange("voxel_m", voxel_m, 0.001, 1.0, "m");
   requireInRange("truncation_m", truncation_m, 2.0 * voxel_m, 1.0, "m");
   requireInRange("carve_m", carve_m, 0.0, 1000.0, "m");
+  requireInRange("splat", splat, 0, 3, "voxels");
   requireInRange("max_weight", max_weight, 1.0, 1e6);
   requireInRange("min_weight", min_weight, 1.0, max_weight);
 }
@@ -149,7 +151,42 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
     }
     dir /= r;
     ++used;
-    const double t0_beam = std::max(0.0, r - trunc - config_.carve_m), t1_beam = r + trunc;
+    const int splat = config_.splat;
+    // Thin traversal: the whole beam (splat 0), else only the carved part before the band.
+    const double t0_beam = std::max(0.0, r - trunc - config_.carve_m), t1_beam = splat > 0 ? r - trunc : r + trunc;
+    const auto update = [&](const Coord& c, double sdf) {
+      const float value = static_cast<float>(std::min(sdf, trunc));  // before the band: free (+trunc)
+      const float w = weight.getValue(c);
+      const float D = w > 0.0f ? tsdf.getValue(c) : 0.0f;
+      tsdf.setValue(c, (D * w + value) / (w + 1.0f));
+      weight.setValue(c, std::min(w + 1.0f, max_w));
+      ++updates;
+    };
+    if (splat > 0) {
+      // The band in slices across the main axis m: the beam's voxel in each slice and its neighbours.
+      int m = 0;
+      if (std::abs(dir[1]) > std::abs(dir[m])) m = 1;
+      if (std::abs(dir[2]) > std::abs(dir[m])) m = 2;
+      const int n1 = (m + 1) % 3, n2 = (m + 2) % 3;
+      const double ua = (o[m] + (r - trunc) * dir[m]) / vs, ub = (o[m] + (r + trunc) * dir[m]) / vs;
+      const long s0 = std::lround(std::min(ua, ub)), s1 = std::lround(std::max(ua, ub));
+      for (long sl = s0; sl <= s1; ++sl) {
+        const double t = (sl * vs - o[m]) / dir[m];  // the beam crosses the slice's centre plane
+        const long c1 = std::lround((o[n1] + t * dir[n1]) / vs), c2 = std::lround((o[n2] + t * dir[n2]) / vs);
+        for (long i1 = c1 - splat; i1 <= c1 + splat; ++i1) {
+          for (long i2 = c2 - splat; i2 <= c2 + splat; ++i2) {
+            Eigen::Vector3i v;
+            v[m] = static_cast<int>(sl);
+            v[n1] = static_cast<int>(i1);
+            v[n2] = static_cast<int>(i2);
+            const double sdf = r - (v.cast<double>() * vs - o).dot(dir);
+            if (sdf < -trunc || sdf > trunc) continue;
+            update(Coord(v.x(), v.y(), v.z()), sdf);
+          }
+        }
+      }
+      if (config_.carve_m <= 0.0) continue;
+    }
     // Amanatides-Woo traversal in u = x / voxel + 0.5, where voxel(u) = floor(u).
     const Eigen::Vector3d a = (o + t0_beam * dir) / vs + Eigen::Vector3d::Constant(0.5);
     const Eigen::Vector3d b = (o + t1_beam * dir) / vs + Eigen::Vector3d::Constant(0.5);
@@ -173,15 +210,8 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
     for (long s = 0; s <= max_steps; ++s) {
       const Eigen::Vector3d centre = ijk.cast<double>() * vs;
       const double sdf = r - (centre - o).dot(dir);  // along the beam, positive in front of the hit
-      if (sdf >= -trunc) {
-        const float value = static_cast<float>(std::min(sdf, trunc));  // before the band: free (+trunc)
-        const Coord c(ijk.x(), ijk.y(), ijk.z());
-        const float w = weight.getValue(c);
-        const float D = w > 0.0f ? tsdf.getValue(c) : 0.0f;
-        tsdf.setValue(c, (D * w + value) / (w + 1.0f));
-        weight.setValue(c, std::min(w + 1.0f, max_w));
-        ++updates;
-      }
+      // With splat the band is done above: here only the free part.
+      if (sdf >= -trunc && (splat == 0 || sdf > trunc)) update(Coord(ijk.x(), ijk.y(), ijk.z()), sdf);
       if (ijk == end) break;
       int k = 0;
       if (t_max[1] < t_max[k]) k = 1;
@@ -266,6 +296,25 @@ TriangleMesh FusedMap::extractMesh() const {
   for (const openvdb::Vec4I& q : quads) {
     add(q[0], q[1], q[2]);
     add(q[0], q[2], q[3]);
+  }
+  // Where cells next to unseen ones were left out, two sheets can meet in one vertex: keep each
+  // such vertex's largest fan (a manifold mesh for the checks and the Ball Pivoting tools).
+  if (dropPinchedFans(mesh.faces, mesh.vertices.size()) > 0) {
+    TriangleMesh kept;
+    std::vector<int> remap(mesh.vertices.size(), -1);
+    for (const Eigen::Vector3i& f : mesh.faces) {
+      Eigen::Vector3i g;
+      for (int k = 0; k < 3; ++k) {
+        if (remap[f[k]] < 0) {
+          remap[f[k]] = static_cast<int>(kept.vertices.size());
+          kept.vertices.push_back(mesh.vertices[f[k]]);
+          kept.normals.push_back(mesh.normals[f[k]]);
+        }
+        g[k] = remap[f[k]];
+      }
+      kept.faces.push_back(g);
+    }
+    mesh = std::move(kept);
   }
   return mesh;
 }

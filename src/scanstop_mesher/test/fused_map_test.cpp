@@ -289,3 +289,25 @@ TEST(FusedMap, UnobservedSpaceStaysAHole) {
   EXPECT_EQ(t.components, 1u);
   EXPECT_EQ(t.boundary_loops, 1u);
 }
+
+// Beams 5 cm apart at the wall (a far wall, sparse planes) with 2 cm voxels: crossed voxels alone
+// (splat 0) leave the band full of gaps and the mesh in pieces; the 3 x 3 splat closes it.
+TEST(FusedMap, SplatClosesTheGapsBetweenSparseBeams) {
+  std::mt19937 rng(5);
+  FusedMapConfig thick;
+  thick.splat = 1;
+  FusedMap sparse, splatted(thick);
+  for (const Eigen::Vector3f& o : {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(0.3f, 0.4f, 0.1f)}) {
+    const std::vector<Eigen::Vector3f> scan = scanWall(o, 3.011, -0.5, 0.5, -0.5, 0.5, 0.05, 0.0, rng, 0.05);
+    sparse.integrate(scan, o);
+    splatted.integrate(scan, o);
+  }
+  const MeshTopology t0 = analyzeTopology(sparse.extractMesh()), t1 = analyzeTopology(splatted.extractMesh());
+  std::printf("sparse beams: splat 0: %zu faces, %zu components; splat 1: %zu faces, %zu components, %zu boundary loops\n",
+              t0.faces, t0.components, t1.faces, t1.components, t1.boundary_loops);
+  EXPECT_LT(t0.faces, t1.faces / 2);
+  EXPECT_EQ(t1.components, 1u);
+  EXPECT_EQ(t1.boundary_loops, 1u);
+  EXPECT_TRUE(t1.manifold());
+  EXPECT_GT(t1.faces, 3500u);  // the 1 m x 1 m wall: 2500 cells of 2 cm, two triangles each, less the rim
+}

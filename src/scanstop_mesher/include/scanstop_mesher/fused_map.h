@@ -40,6 +40,13 @@ struct FusedMapConfig {
   /// more than truncation_m before its hit and at most truncation_m + carve_m get a +truncation_m
   /// update. 0 = no carving; the default (1000) carves the whole beam from the sensor origin.
   double carve_m = 1000.0;
+  /// Lateral reach of each reading's band [voxels], [0, 3]. 0: only the voxels the beam crosses;
+  /// s > 0: in every voxel slice across the beam's main axis, the (2s+1) x (2s+1) voxels around the
+  /// beam (each with its own distance along the beam), so beams up to 2s+1 voxels apart (far
+  /// readings, sparse planes) still give a gap-free band. The free-space carving stays one voxel wide.
+  /// Default 0: the lateral neighbours get the beam's distance along it, which is off on tilted and
+  /// curved surfaces and at the rim of what was seen (sphere test: max vertex error 3.6 -> 5.9 mm).
+  int splat = 0;
   /// Weight a voxel needs to count as observed (for surface points and the mesh), [1, max_weight].
   /// 2: a surface needs two readings; one reading alone (a random reading) never makes a surface.
   double min_weight = 2.0;
@@ -84,7 +91,9 @@ class FusedMap {
   /// A triangle mesh of the zero level set: openvdb::tools::volumeToMesh (isovalue 0, adaptivity 0),
   /// quads split into two triangles, only polygons whose vertices lie in surface cells (all 8
   /// corners observed; the rest would border unseen space). Faces are counter-clockwise seen from
-  /// the free side; vertex normals are the field's gradient (towards the free side).
+  /// the free side; vertex normals are the field's gradient (towards the free side). Where two
+  /// sheets meet in one vertex (at the rim of the seen space) only its largest fan is kept
+  /// (dropPinchedFans), so the mesh is manifold.
   TriangleMesh extractMesh() const;
 
   /// Signed distance [m] and weight of the voxel containing the point p [m] (map frame); weight 0
