@@ -1,0 +1,131 @@
+#pragma once
+/// The fused volumetric map (issue #20): a truncated signed distance field (TSDF) over sparse
+/// OpenVDB grids into which every registered scan is integrated with its sensor origin. Each
+/// reading updates the voxels its beam crosses: inside the truncation band around the hit the
+/// signed distance along the beam (positive in front of the surface, on the free side; negative
+/// behind it) enters a weighted running average; before the band the voxels get "free" (+truncation)
+/// updates, so a spurious reading that later scans see through averages away. The zero crossing of
+/// the averaged field is the fused surface: sub-voxel, with the noise of all scans averaged
+/// (thesis 8: "the inaccuracies of all scans accumulate in the map"; thesis 9: Marching Cubes).
+///
+/// Voxel (i,j,k) is centred at (i,j,k) * voxel_m in the map frame (OpenVDB's convention). A voxel
+/// is "observed" when its weight (number of readings that updated it, capped at max_weight) is at
+/// least min_weight. Surfaces are only taken from cells (the cube between voxels (i,j,k) and
+/// (i+1,j+1,k+1)) whose 8 corner voxels are all observed: unseen space stays a hole.
+///
+/// OpenVDB stays out of this header (it is heavy to compile); the grids live in the implementation.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scanstop_common/cloud.h"
+#include "scanstop_mesher/mesher.h"
+
+namespace scanstop {
+namespace mesher {
+
+/// Settings of the fused map.
+struct FusedMapConfig {
+  /// Voxel edge [m], [0.001, 1]. 0.02: the scale of the sensor noise (URG-04LX: 1 cm up to 1 m,
+  /// 1 % of the range beyond), so the averaged surface is sub-voxel without a huge voxel count.
+  double voxel_m = 0.02;
+  /// Half width of the band around each hit that gets signed distances [m], [2 * voxel_m, 1].
+  /// 0.06 = 3 voxels = 3 sigma of a reading at 2 m (2 cm): a noisy reading near the surface is
+  /// not clipped by the band, so the running average of the distances is unbiased.
+  double truncation_m = 0.06;
+  /// Free space carved before the band along each beam [m], [0, 1000]: voxels the beam crosses at
+  /// more than truncation_m before its hit and at most truncation_m + carve_m get a +truncation_m
+  /// update. 0 = no carving; the default (1000) carves the whole beam from the sensor origin.
+  double carve_m = 1000.0;
+  /// Lateral reach of each reading's band [voxels], [0, 3]. 0: only the voxels the beam crosses;
+  /// s > 0: in every voxel slice across the beam's main axis, the (2s+1) x (2s+1) voxels around the
+  /// beam (each with its own distance along the beam), so beams up to 2s+1 voxels apart (far
+  /// readings, sparse planes) still give a gap-free band. The free-space carving stays one voxel wide.
+  /// Default 0: the lateral neighbours get the beam's distance along it, which is off on tilted and
+  /// curved surfaces and at the rim of what was seen (sphere test: max vertex error 3.6 -> 5.9 mm).
+  int splat = 0;
+  /// Weight a voxel needs to count as observed (for surface points and the mesh), [1, max_weight].
+  /// 2: a surface needs two readings; one reading alone (a random reading) never makes a surface.
+  double min_weight = 2.0;
+  /// Cap of the weight (the running average then becomes a moving one that can still change), [1, 1e6].
+  double max_weight = 10000.0;
+  /// Throws ConfigError naming the field, its value and the allowed range.
+  void validate() const;
+};
+
+/// Counts and times of an integration (cumulative over the map's life).
+struct FusedMapStats {
+  size_t scans = 0;            ///< integrate() calls
+  size_t points = 0;           ///< finite readings integrated
+  size_t skipped_points = 0;   ///< readings skipped: not finite (the scanner's invalid readings), or at the origin
+  size_t voxel_updates = 0;    ///< voxel updates (band and free space)
+  double integrate_seconds = 0.0;
+};
+
+class FusedMap {
+ public:
+  /// Validates the config (ConfigError naming the field).
+  explicit FusedMap(const FusedMapConfig& config = FusedMapConfig());
+  ~FusedMap();
+  FusedMap(FusedMap&&) noexcept;
+  FusedMap& operator=(FusedMap&&) noexcept;
+  FusedMap(const FusedMap&) = delete;
+  FusedMap& operator=(const FusedMap&) = delete;
+
+  const FusedMapConfig& config() const { return config_; }
+
+  /// Integrates one scan: points [m] and the sensor origin [m], both in the map frame. Points that
+  /// are not finite or lie at the origin are skipped (counted in stats().skipped_points). Throws
+  /// ConfigError when the origin is not finite. Returns the number of points integrated.
+  size_t integrate(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin);
+
+  /// Points on the zero crossing, one per surface cell (all 8 corners observed, a sign change):
+  /// the mean of the cell's edge crossings (linear interpolation along the edges), moved onto the
+  /// zero level of the cell's trilinear field by one Newton step. Normals: the field's gradient
+  /// there, normalized, pointing to the observed free (positive) side. `origins`/`view` stay empty.
+  ScanPoints surfacePoints() const;
+
+  /// A triangle mesh of the zero level set: openvdb::tools::volumeToMesh (isovalue 0, adaptivity 0),
+  /// quads split into two triangles, only polygons whose vertices lie in surface cells (all 8
+  /// corners observed; the rest would border unseen space). Faces are counter-clockwise seen from
+  /// the free side; vertex normals are the field's gradient (towards the free side). Where two
+  /// sheets meet in one vertex (at the rim of the seen space) only its largest fan is kept
+  /// (dropPinchedFans), so the mesh is manifold.
+  TriangleMesh extractMesh() const;
+
+  /// Signed distance [m] and weight of the voxel containing the point p [m] (map frame); weight 0
+  /// (and distance truncation_m) for a voxel never updated.
+  float distanceAt(const Eigen::Vector3f& p) const;
+  float weightAt(const Eigen::Vector3f& p) const;
+
+  /// Voxels ever updated (active in the grids).
+  size_t activeVoxels() const;
+  /// Voxels with weight >= min_weight.
+  size_t observedVoxels() const;
+  /// Memory of both grids [bytes] (OpenVDB's memUsage).
+  size_t memoryBytes() const;
+  const FusedMapStats& stats() const { return stats_; }
+
+  /// Writes both grids ("tsdf", "weight") as an OpenVDB file (.vdb). Throws IoError naming the file.
+  void save(const std::string& path) const;
+
+ private:
+  struct Grids;
+  FusedMapConfig config_;
+  std::unique_ptr<Grids> grids_;
+  FusedMapStats stats_;
+};
+
+/// Integrates every scan of a map directory (scanstop_common/map_dir.h), one scan at a time, at its
+/// map pose with its sensor origin (map_pose * sensor_origin). Strict like loadMapDirectory: throws
+/// IoError naming the file for a missing poses.csv, any problem of the directory, an unreadable scan
+/// or a map without scans; with `skipped` given, problems and unreadable scans are appended there
+/// instead (naming the file) and the good scans are integrated (IoError still when none is left).
+/// Returns the number of scans integrated.
+size_t integrateMapDirectory(FusedMap& map, const std::string& dir, std::vector<std::string>* skipped = nullptr);
+
+}  // namespace mesher
+}  // namespace scanstop

@@ -1,0 +1,402 @@
+#include "scanstop_mesher/fused_map.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <sstream>
+#include <utility>
+
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/VolumeToMesh.h>
+
+#include "scanstop_common/config.h"
+#include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/map_dir.h"
+#include "scanstop_mesher/mesh_analysis.h"
+
+namespace scanstop {
+namespace mesher {
+
+struct FusedMap::Grids {
+  openvdb::FloatGrid::Ptr tsdf;    ///< signed distance [m]; background +truncation (never updated)
+  openvdb::FloatGrid::Ptr weight;  ///< readings per voxel (capped); background 0
+};
+
+namespace {
+
+using Coord = openvdb::Coord;
+using ConstAccessor = openvdb::FloatGrid::ConstAccessor;
+
+double elapsed(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// The 8 corner values of the cell between voxels c and c + (1,1,1); corner index bits: x = 1,
+/// y = 2, z = 4. False when a corner is not observed.
+bool loadCell(const ConstAccessor& tsdf, const ConstAccessor& weight, const Coord& c, float min_weight, float v[8]) {
+  for (int k = 0; k < 8; ++k) {
+    const Coord q(c.x() + (k & 1), c.y() + ((k >> 1) & 1), c.z() + ((k >> 2) & 1));
+    if (weight.getValue(q) < min_weight) return false;
+    v[k] = tsdf.getValue(q);
+  }
+  return true;
+}
+
+/// True when the cell's corner values change sign (a value of 0 counts as positive).
+bool hasCrossing(const float v[8]) {
+  bool neg = false, pos = false;
+  for (int k = 0; k < 8; ++k) (v[k] < 0.0f ? neg : pos) = true;
+  return neg && pos;
+}
+
+/// The cell's trilinear field at local coordinates x in [0,1]^3, and its gradient [m per voxel].
+double trilinear(const float v[8], const Eigen::Vector3d& x, Eigen::Vector3d* gradient) {
+  double f = 0.0;
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 8; ++k) {
+    double w[3], dw[3];
+    for (int a = 0; a < 3; ++a) {
+      const bool hi = (k >> a) & 1;
+      w[a] = hi ? x[a] : 1.0 - x[a];
+      dw[a] = hi ? 1.0 : -1.0;
+    }
+    f += v[k] * w[0] * w[1] * w[2];
+    g.x() += v[k] * dw[0] * w[1] * w[2];
+    g.y() += v[k] * w[0] * dw[1] * w[2];
+    g.z() += v[k] * w[0] * w[1] * dw[2];
+  }
+  if (gradient) *gradient = g;
+  return f;
+}
+
+/// The mean of the cell's edge crossings (linear interpolation along each of the 12 edges with a
+/// sign change), in local coordinates.
+Eigen::Vector3d meanCrossing(const float v[8]) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (int a = 0; a < 8; ++a) {
+    for (int axis = 0; axis < 3; ++axis) {
+      if ((a >> axis) & 1) continue;
+      const int b = a | (1 << axis);
+      if ((v[a] < 0.0f) == (v[b] < 0.0f)) continue;
+      const double f = static_cast<double>(v[a]) / (static_cast<double>(v[a]) - static_cast<double>(v[b]));
+      Eigen::Vector3d p(a & 1, (a >> 1) & 1, (a >> 2) & 1);
+      p[axis] = f;
+      sum += p;
+      ++n;
+    }
+  }
+  return n > 0 ? Eigen::Vector3d(sum / n) : Eigen::Vector3d::Constant(0.5);
+}
+
+std::string vecText(const Eigen::Vector3f& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+}  // namespace
+
+void FusedMapConfig::validate() const {
+  requireInRange("voxel_m", voxel_m, 0.001, 1.0, "m");
+  requireInRange("truncation_m", truncation_m, 2.0 * voxel_m, 1.0, "m");
+  requireInRange("carve_m", carve_m, 0.0, 1000.0, "m");
+  requireInRange("splat", splat, 0, 3, "voxels");
+  requireInRange("max_weight", max_weight, 1.0, 1e6);
+  requireInRange("min_weight", min_weight, 1.0, max_weight);
+}
+
+FusedMap::FusedMap(const FusedMapConfig& config) : config_(config), grids_(new Grids) {
+  config_.validate();
+  openvdb::initialize();
+  const auto transform = openvdb::math::Transform::createLinearTransform(config_.voxel_m);
+  grids_->tsdf = openvdb::FloatGrid::create(static_cast<float>(config_.truncation_m));
+  grids_->tsdf->setTransform(transform);
+  grids_->tsdf->setName("tsdf");
+  grids_->tsdf->setGridClass(openvdb::GRID_UNKNOWN);
+  grids_->weight = openvdb::FloatGrid::create(0.0f);
+  grids_->weight->setTransform(transform->copy());
+  grids_->weight->setName("weight");
+}
+
+FusedMap::~FusedMap() = default;
+FusedMap::FusedMap(FusedMap&&) noexcept = default;
+FusedMap& FusedMap::operator=(FusedMap&&) noexcept = default;
+
+size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
+  if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
+  const auto t0 = std::chrono::steady_clock::now();
+  openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
+  openvdb::FloatGrid::Accessor weight = grids_->weight->getAccessor();
+  const double vs = config_.voxel_m, trunc = config_.truncation_m;
+  const float max_w = static_cast<float>(config_.max_weight);
+  const Eigen::Vector3d o = origin.cast<double>();
+  size_t used = 0, updates = 0;
+  for (const Eigen::Vector3f& pf : points) {
+    if (!pf.allFinite()) {
+      ++stats_.skipped_points;
+      continue;
+    }
+    Eigen::Vector3d dir = pf.cast<double>() - o;
+    const double r = dir.norm();
+    if (r < 1e-6) {
+      ++stats_.skipped_points;
+      continue;
+    }
+    dir /= r;
+    ++used;
+    const int splat = config_.splat;
+    // Thin traversal: the whole beam (splat 0), else only the carved part before the band.
+    const double t0_beam = std::max(0.0, r - trunc - config_.carve_m), t1_beam = splat > 0 ? r - trunc : r + trunc;
+    const auto update = [&](const Coord& c, double sdf) {
+      const float value = static_cast<float>(std::min(sdf, trunc));  // before the band: free (+trunc)
+      const float w = weight.getValue(c);
+      const float D = w > 0.0f ? tsdf.getValue(c) : 0.0f;
+      tsdf.setValue(c, (D * w + value) / (w + 1.0f));
+      weight.setValue(c, std::min(w + 1.0f, max_w));
+      ++updates;
+    };
+    if (splat > 0) {
+      // The band in slices across the main axis m: the beam's voxel in each slice and its neighbours.
+      int m = 0;
+      if (std::abs(dir[1]) > std::abs(dir[m])) m = 1;
+      if (std::abs(dir[2]) > std::abs(dir[m])) m = 2;
+      const int n1 = (m + 1) % 3, n2 = (m + 2) % 3;
+      const double ua = (o[m] + (r - trunc) * dir[m]) / vs, ub = (o[m] + (r + trunc) * dir[m]) / vs;
+      const long s0 = std::lround(std::min(ua, ub)), s1 = std::lround(std::max(ua, ub));
+      for (long sl = s0; sl <= s1; ++sl) {
+        const double t = (sl * vs - o[m]) / dir[m];  // the beam crosses the slice's centre plane
+        const long c1 = std::lround((o[n1] + t * dir[n1]) / vs), c2 = std::lround((o[n2] + t * dir[n2]) / vs);
+        for (long i1 = c1 - splat; i1 <= c1 + splat; ++i1) {
+          for (long i2 = c2 - splat; i2 <= c2 + splat; ++i2) {
+            Eigen::Vector3i v;
+            v[m] = static_cast<int>(sl);
+            v[n1] = static_cast<int>(i1);
+            v[n2] = static_cast<int>(i2);
+            const double sdf = r - (v.cast<double>() * vs - o).dot(dir);
+            if (sdf < -trunc || sdf > trunc) continue;
+            update(Coord(v.x(), v.y(), v.z()), sdf);
+          }
+        }
+      }
+      if (config_.carve_m <= 0.0) continue;
+    }
+    // Amanatides-Woo traversal in u = x / voxel + 0.5, where voxel(u) = floor(u).
+    const Eigen::Vector3d a = (o + t0_beam * dir) / vs + Eigen::Vector3d::Constant(0.5);
+    const Eigen::Vector3d b = (o + t1_beam * dir) / vs + Eigen::Vector3d::Constant(0.5);
+    const Eigen::Vector3d d = b - a;
+    Eigen::Vector3i ijk(static_cast<int>(std::floor(a.x())), static_cast<int>(std::floor(a.y())),
+                        static_cast<int>(std::floor(a.z())));
+    const Eigen::Vector3i end(static_cast<int>(std::floor(b.x())), static_cast<int>(std::floor(b.y())),
+                              static_cast<int>(std::floor(b.z())));
+    Eigen::Vector3i step;
+    Eigen::Vector3d t_max, t_delta;
+    for (int k = 0; k < 3; ++k) {
+      step[k] = d[k] > 0 ? 1 : -1;
+      if (std::abs(d[k]) < 1e-12) {
+        t_max[k] = t_delta[k] = INFINITY;
+      } else {
+        t_delta[k] = 1.0 / std::abs(d[k]);
+        t_max[k] = ((d[k] > 0 ? ijk[k] + 1 : ijk[k]) - a[k]) / d[k];
+      }
+    }
+    const long max_steps = (end - ijk).cwiseAbs().sum() + 4;
+    for (long s = 0; s <= max_steps; ++s) {
+      const Eigen::Vector3d centre = ijk.cast<double>() * vs;
+      const double sdf = r - (centre - o).dot(dir);  // along the beam, positive in front of the hit
+      // With splat the band is done above: here only the free part.
+      if (sdf >= -trunc && (splat == 0 || sdf > trunc)) update(Coord(ijk.x(), ijk.y(), ijk.z()), sdf);
+      if (ijk == end) break;
+      int k = 0;
+      if (t_max[1] < t_max[k]) k = 1;
+      if (t_max[2] < t_max[k]) k = 2;
+      if (t_max[k] > 1.0) break;
+      ijk[k] += step[k];
+      t_max[k] += t_delta[k];
+    }
+  }
+  ++stats_.scans;
+  stats_.points += used;
+  stats_.voxel_updates += updates;
+  stats_.integrate_seconds += elapsed(t0);
+  return used;
+}
+
+ScanPoints FusedMap::surfacePoints() const {
+  const ConstAccessor tsdf = grids_->tsdf->getConstAccessor();
+  const ConstAccessor weight = grids_->weight->getConstAccessor();
+  const float min_w = static_cast<float>(config_.min_weight);
+  const double vs = config_.voxel_m;
+  ScanPoints out;
+  float v[8];
+  for (auto it = grids_->weight->cbeginValueOn(); it; ++it) {
+    if (!it.isVoxelValue() || *it < min_w) continue;
+    const Coord c = it.getCoord();
+    if (!loadCell(tsdf, weight, c, min_w, v) || !hasCrossing(v)) continue;
+    Eigen::Vector3d x = meanCrossing(v);
+    Eigen::Vector3d g;
+    const double f = trilinear(v, x, &g);
+    if (g.squaredNorm() > 1e-20) x = (x - f * g / g.squaredNorm()).cwiseMax(0.0).cwiseMin(1.0);  // one Newton step
+    trilinear(v, x, &g);
+    if (!(g.norm() > 1e-12)) continue;  // a flat field has no normal: not a surface
+    const Eigen::Vector3d p = (Eigen::Vector3d(c.x(), c.y(), c.z()) + x) * vs;
+    out.points.push_back(p.cast<float>());
+    out.normals.push_back(g.normalized().cast<float>());  // increasing distance: the free side
+  }
+  return out;
+}
+
+TriangleMesh FusedMap::extractMesh() const {
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*grids_->tsdf, points, triangles, quads, 0.0, 0.0);
+
+  const ConstAccessor tsdf = grids_->tsdf->getConstAccessor();
+  const ConstAccessor weight = grids_->weight->getConstAccessor();
+  const float min_w = static_cast<float>(config_.min_weight);
+  const double vs = config_.voxel_m;
+  // Per vertex: its cell (volumeToMesh puts one vertex into each surface cell) must be observed.
+  std::vector<int> index(points.size(), -1);
+  std::vector<char> ok(points.size(), 0);
+  std::vector<Eigen::Vector3f> normals(points.size(), Eigen::Vector3f::Zero());
+  float v[8];
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d u(points[i].x() / vs, points[i].y() / vs, points[i].z() / vs);
+    const Coord c(static_cast<int>(std::floor(u.x())), static_cast<int>(std::floor(u.y())),
+                  static_cast<int>(std::floor(u.z())));
+    if (!loadCell(tsdf, weight, c, min_w, v)) continue;
+    Eigen::Vector3d g;
+    trilinear(v, (u - Eigen::Vector3d(c.x(), c.y(), c.z())).cwiseMax(0.0).cwiseMin(1.0), &g);
+    if (g.norm() > 1e-12) normals[i] = g.normalized().cast<float>();
+    ok[i] = 1;
+  }
+  TriangleMesh mesh;
+  const auto use = [&](uint32_t i) {
+    if (index[i] < 0) {
+      index[i] = static_cast<int>(mesh.vertices.size());
+      mesh.vertices.emplace_back(points[i].x(), points[i].y(), points[i].z());
+      mesh.normals.push_back(normals[i]);
+    }
+    return index[i];
+  };
+  // volumeToMesh winds its polygons counter-clockwise seen from the positive (free) side, the
+  // project's convention (checked by the sphere test: every face turned outwards).
+  const auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
+    if (!ok[a] || !ok[b] || !ok[c]) return;
+    mesh.faces.emplace_back(use(a), use(b), use(c));
+  };
+  for (const openvdb::Vec3I& t : triangles) add(t[0], t[1], t[2]);
+  for (const openvdb::Vec4I& q : quads) {
+    add(q[0], q[1], q[2]);
+    add(q[0], q[2], q[3]);
+  }
+  // Where cells next to unseen ones were left out, two sheets can meet in one vertex: keep each
+  // such vertex's largest fan (a manifold mesh for the checks and the Ball Pivoting tools).
+  if (dropPinchedFans(mesh.faces, mesh.vertices.size()) > 0) {
+    TriangleMesh kept;
+    std::vector<int> remap(mesh.vertices.size(), -1);
+    for (const Eigen::Vector3i& f : mesh.faces) {
+      Eigen::Vector3i g;
+      for (int k = 0; k < 3; ++k) {
+        if (remap[f[k]] < 0) {
+          remap[f[k]] = static_cast<int>(kept.vertices.size());
+          kept.vertices.push_back(mesh.vertices[f[k]]);
+          kept.normals.push_back(mesh.normals[f[k]]);
+        }
+        g[k] = remap[f[k]];
+      }
+      kept.faces.push_back(g);
+    }
+    mesh = std::move(kept);
+  }
+  return mesh;
+}
+
+float FusedMap::distanceAt(const Eigen::Vector3f& p) const {
+  const Eigen::Vector3d u = p.cast<double>() / config_.voxel_m + Eigen::Vector3d::Constant(0.5);
+  const Coord c(static_cast<int>(std::floor(u.x())), static_cast<int>(std::floor(u.y())),
+                static_cast<int>(std::floor(u.z())));
+  return grids_->tsdf->getConstAccessor().getValue(c);
+}
+
+float FusedMap::weightAt(const Eigen::Vector3f& p) const {
+  const Eigen::Vector3d u = p.cast<double>() / config_.voxel_m + Eigen::Vector3d::Constant(0.5);
+  const Coord c(static_cast<int>(std::floor(u.x())), static_cast<int>(std::floor(u.y())),
+                static_cast<int>(std::floor(u.z())));
+  return grids_->weight->getConstAccessor().getValue(c);
+}
+
+size_t FusedMap::activeVoxels() const { return static_cast<size_t>(grids_->weight->activeVoxelCount()); }
+
+size_t FusedMap::observedVoxels() const {
+  const float min_w = static_cast<float>(config_.min_weight);
+  size_t n = 0;
+  for (auto it = grids_->weight->cbeginValueOn(); it; ++it) {
+    if (*it < min_w) continue;
+    n += it.isVoxelValue() ? 1 : static_cast<size_t>(it.getVoxelCount());
+  }
+  return n;
+}
+
+size_t FusedMap::memoryBytes() const {
+  return static_cast<size_t>(grids_->tsdf->memUsage() + grids_->weight->memUsage());
+}
+
+void FusedMap::save(const std::string& path) const {
+  const std::string problem = outputFileProblem(path);
+  if (!problem.empty()) throw IoError(path, "cannot write: " + problem);
+  const std::string tmp = temporaryPathFor(path);
+  try {
+    openvdb::io::File file(tmp);
+    openvdb::GridPtrVec grids{grids_->tsdf, grids_->weight};
+    file.write(grids);
+    file.close();
+  } catch (const std::exception& e) {
+    ::remove(tmp.c_str());
+    throw IoError(path, std::string("cannot write the OpenVDB file: ") + e.what());
+  }
+  commitTemporaryFile(tmp, path);
+}
+
+size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vector<std::string>* skipped) {
+  // Reading must not create anything (MapDirectory would create a missing directory).
+  struct stat st;
+  if (::stat((dir + "/poses.csv").c_str(), &st) != 0)
+    throw IoError(dir + "/poses.csv", "does not exist (no scan in the map yet)");
+  const MapDirectory map(dir);
+  for (const MapProblem& p : map.problems()) {
+    if (!skipped) throw IoError(dir, p.message());
+    skipped->push_back(p.message());
+  }
+  if (map.size() == 0) throw IoError(map.posesPath(), "the map has no scans");
+  size_t loaded = 0;
+  std::vector<Eigen::Vector3f> points;
+  for (size_t s = 0; s < map.size(); ++s) {
+    const MapScanInfo& info = map.scans()[s];
+    PointCloud scan;
+    try {
+      scan = map.loadScan(s);
+    } catch (const std::exception& e) {
+      if (!skipped) throw;
+      skipped->push_back("scan " + std::to_string(info.index) + " skipped: " + e.what());
+      continue;
+    }
+    const Eigen::Isometry3f T_map_base = info.map_pose.toIsometry3f();
+    points.resize(scan.points.size());
+    for (size_t i = 0; i < scan.points.size(); ++i) points[i] = T_map_base * scan.points[i];  // NaN stays NaN
+    fused.integrate(points, T_map_base * info.sensor_origin.cast<float>());
+    ++loaded;
+  }
+  if (loaded == 0) throw IoError(dir, "none of its " + std::to_string(map.size()) + " scan files could be read");
+  return loaded;
+}
+
+}  // namespace mesher
+}  // namespace scanstop

@@ -1,0 +1,142 @@
+// The fuse_map command-line tool on a small map directory (two scans of the synthetic room): the
+// three outputs, the JSON, and bad arguments and maps named.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "scanstop_common/cli_test.h"
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/map_dir.h"
+#include "synthetic_room.h"
+
+using namespace scanstop;
+
+namespace {
+
+using scanstop::test_util::CliRun;
+using scanstop::test_util::TempDir;
+
+CliRun run(const std::string& args) { return scanstop::test_util::runCommand(std::string(FUSE_MAP_EXE) + " " + args); }
+
+/// The number after "key": in a flat JSON object (-1 when missing).
+double jsonValue(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return -1;
+  return std::stod(json.substr(at + key.size() + 4));
+}
+
+/// A map directory with two scans of the synthetic room, robot poses (0, 0, 0) and (-1, 0.5, 90 deg).
+void writeRoomMap(const std::string& dir) {
+  MapDirectory map(dir);
+  const Pose2D poses[2] = {Pose2D(0.0, 0.0, 0.0), Pose2D(-1.0, 0.5, M_PI / 2)};
+  for (uint32_t i = 0; i < 2; ++i) {
+    MapScanInfo info;
+    info.index = i;
+    info.map_pose = poses[i];
+    info.sensor_origin = Eigen::Vector3d(0.0, 0.0, 0.45);
+    const Eigen::Isometry3f T_map_base = poses[i].toIsometry3f();
+    const Eigen::Vector3f origin = T_map_base * info.sensor_origin.cast<float>();
+    PointCloud base;
+    for (const auto& p : test::scanRoom(origin, 400, 1000, 0.005f, i + 1)) base.push_back(T_map_base.inverse() * p);
+    map.append(info, base);
+  }
+}
+
+}  // namespace
+
+TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
+  TempDir tmp("fuse_map_cli_test");
+  writeRoomMap(tmp.path + "/map");
+  CliRun r = run(tmp.path + "/map " + tmp.path + "/mc.ply --json --vdb " + tmp.path + "/map.vdb");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << "one line: " << r.out;
+  EXPECT_EQ(jsonValue(r.out, "scans"), 2);
+  EXPECT_EQ(jsonValue(r.out, "points"), 667200);
+  EXPECT_GT(jsonValue(r.out, "observed_voxels"), 100000);
+  EXPECT_GT(jsonValue(r.out, "memory_bytes"), 1e6);
+  const double triangles = jsonValue(r.out, "triangles");
+  EXPECT_GT(triangles, 500000);
+  EXPECT_EQ(jsonValue(r.out, "nonmanifold_edges"), 0);
+  EXPECT_EQ(jsonValue(r.out, "nonmanifold_vertices"), 0);
+  const TriangleMesh mc = readMesh(tmp.path + "/mc.ply");
+  EXPECT_EQ(static_cast<double>(mc.faces.size()), triangles);
+  EXPECT_EQ(mc.normals.size(), mc.vertices.size());
+  // Every vertex lies on the room's walls, floor, ceiling or the box (within a voxel).
+  const test::Box room = test::roomBounds(), box = test::roomObstacle();
+  size_t off = 0;
+  float worst = 0.0f;
+  Eigen::Vector3f worst_at = Eigen::Vector3f::Zero();
+  for (const auto& v : mc.vertices) {
+    float d = 1e9f;
+    for (int a = 0; a < 3; ++a) d = std::min({d, std::abs(v[a] - room.lo[a]), std::abs(v[a] - room.hi[a])});
+    const Eigen::Vector3f q = v.cwiseMax(box.lo).cwiseMin(box.hi);
+    d = std::min(d, (q - v).norm());
+    off += d > 0.02f;
+    if (d > worst) {
+      worst = d;
+      worst_at = v;
+    }
+  }
+  std::printf("marching cubes: %zu of %zu vertices more than 2 cm off the room; the worst %.1f mm at (%.2f, %.2f, %.2f)\n",
+              off, mc.vertices.size(), 1e3 * worst, worst_at.x(), worst_at.y(), worst_at.z());
+  // Only at the box's convex edges (TSDF rounds them: beams passing the edge see through its cells).
+  EXPECT_LT(off, mc.vertices.size() / 1000);
+  EXPECT_LT(worst, 0.03f);
+  std::ifstream vdb(tmp.path + "/map.vdb", std::ios::binary | std::ios::ate);
+  EXPECT_GT(static_cast<long>(vdb.tellg()), 100000);
+
+  r = run(tmp.path + "/map " + tmp.path + "/points.ply --mesh points");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("points with normals"), std::string::npos) << r.out;
+  const PointCloud points = readCloud(tmp.path + "/points.ply");
+  EXPECT_GT(points.size(), 200000u);
+  EXPECT_EQ(points.normals.size(), points.size());
+
+  r = run(tmp.path + "/map " + tmp.path + "/bpa.stl --mesh bpa --voxel 0.05 --json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_GT(jsonValue(r.out, "triangles"), 10000);
+  EXPECT_EQ(static_cast<double>(readMesh(tmp.path + "/bpa.stl").faces.size()), jsonValue(r.out, "triangles"));
+}
+
+TEST(FuseMapCli, BadArgumentsAndMapsAreNamed) {
+  TempDir tmp("fuse_map_cli_test");
+  CliRun r = run("--help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out.rfind("usage: fuse_map", 0), 0u) << r.out;
+  r = run(tmp.path + " " + tmp.path + "/x.ply --voxel 0");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("fuse_map: --voxel 0: not a number in [0.001, 1]"), std::string::npos) << r.out;
+  r = run(tmp.path + " " + tmp.path + "/x.ply --truncation 0.03");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("truncation_m"), std::string::npos) << r.out;
+  r = run(tmp.path + " " + tmp.path + "/x.stl --mesh points");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("x.stl"), std::string::npos) << r.out;
+  r = run(tmp.path + " " + tmp.path + "/x.ply --mesh voxels");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.out.find("--mesh voxels"), std::string::npos) << r.out;
+  r = run(tmp.path + " " + tmp.path + "/x.ply --radii 0.05");
+  EXPECT_EQ(r.status, 2);
+  r = run(tmp.path + " " + tmp.path + "/x.ply");  // a directory that is no map
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.path + "/poses.csv: does not exist"), std::string::npos) << r.out;
+  r = run(tmp.path + " " + tmp.path + "/no_dir/x.ply");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.path + "/no_dir/x.ply: cannot write"), std::string::npos) << r.out;
+
+  writeRoomMap(tmp.path + "/map");
+  ASSERT_EQ(std::remove((tmp.path + "/map/scans/scan_0001.pcd").c_str()), 0);
+  r = run(tmp.path + "/map " + tmp.path + "/m.ply");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(tmp.path + "/map/scans/scan_0001.pcd: no such file"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::ifstream(tmp.path + "/m.ply").good());
+  r = run(tmp.path + "/map " + tmp.path + "/m.ply --skip-bad --json");
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("fuse_map: warning: skipped: " + tmp.path + "/map/scans/scan_0001.pcd"), std::string::npos)
+      << r.out;
+  EXPECT_TRUE(std::ifstream(tmp.path + "/m.ply").good());
+}

@@ -1,0 +1,163 @@
+/// fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--splat n] [--min-weight w]
+///          [--mesh marching_cubes|points|bpa] [--radii r1,...] [--vdb FILE] [--json] [--skip-bad]
+/// Integrates every scan of a map directory into the fused TSDF map (fused_map.h) and writes its
+/// surface: Marching Cubes of the field, the fused surface points with normals, or Ball Pivoting of
+/// those points.
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
+#include "scanstop_common/options.h"
+#include "scanstop_mesher/fused_map.h"
+#include "scanstop_mesher/mesher.h"
+
+using namespace scanstop;
+using namespace scanstop::mesher;
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--splat n] [--min-weight w]\n"
+    "                [--mesh marching_cubes|points|bpa] [--radii r1,r2,...] [--vdb FILE] [--json] [--skip-bad]\n"
+    "  MAP_DIR       a map directory (poses.csv + scans/)\n"
+    "  OUTPUT        .stl or .ply for a mesh; .ply, .pcd or .xyz for --mesh points; its directory must exist\n"
+    "  --voxel       voxel edge [m], [0.001, 1] (default 0.02)\n"
+    "  --truncation  half width of the signed-distance band around each reading [m], [2 voxels, 1]\n"
+    "                (default 3 voxels: 0.06 at the default voxel)\n"
+    "  --carve       free space carved before the band along each beam [m], [0, 1000]; 0 = none\n"
+    "                (default 1000: the whole beam)\n"
+    "  --splat       lateral reach of each reading's band [voxels], [0, 3] (default 0: the crossed voxels;\n"
+    "                1: 3 x 3 voxels across the beam, for beams up to 3 voxels apart, less accurate)\n"
+    "  --min-weight  readings a voxel needs to count as seen, [1, 10000] (default 2)\n"
+    "  --mesh        marching_cubes (default): volumeToMesh of the field; points: the fused surface points\n"
+    "                with normals; bpa: Ball Pivoting of those points\n"
+    "  --radii       ball radii for --mesh bpa [m] (default: automatic from the point spacing)\n"
+    "  --vdb         also write the fused grids (tsdf, weight) as an OpenVDB file\n"
+    "  --json        print the result as one JSON object\n"
+    "  --skip-bad    fuse the good scans of a map directory with bad scan files or lines (each named on\n"
+    "                stderr); default: refuse such a map, naming the first problem\n"
+    "exit status: 0 written, 2 bad arguments, 1 unreadable map or nothing to mesh\n";
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string map_dir, output, mode = "marching_cubes", vdb;
+  FusedMapConfig config;
+  double truncation = -1.0;
+  MesherConfig bpa_config;
+  bool json = false, skip_bad = false;
+  Options opts("fuse_map", kUsage);
+  opts.positional("MAP_DIR", map_dir)
+      .positional("OUTPUT", output)
+      .real("--voxel", config.voxel_m, 0.001, 1.0)
+      .real("--truncation", truncation, 0.002, 1.0)
+      .real("--carve", config.carve_m, 0.0, 1000.0)
+      .integer("--splat", config.splat, 0, 3)
+      .real("--min-weight", config.min_weight, 1.0, 10000.0)
+      .choice("--mesh", mode, {"marching_cubes", "points", "bpa"})
+      .custom("--radii", [&](const std::string& v) { bpa_config.radii_m = parseRadii(v); })
+      .text("--vdb", vdb)
+      .flag("--json", json)
+      .flag("--skip-bad", skip_bad);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
+  const auto usage = [](const std::string& problem) {
+    std::cerr << "fuse_map: " << problem << "\n" << kUsage;
+    return kExitUsage;
+  };
+  config.truncation_m = truncation > 0 ? truncation : 3.0 * config.voxel_m;
+  try {
+    config.validate();
+  } catch (const ConfigError& e) {
+    return usage(std::string(e.what()) + (truncation > 0 ? " (--truncation)" : ""));
+  }
+  const std::string ext = fileExtension(output);
+  if (mode == "points" ? (ext != "ply" && ext != "pcd" && ext != "xyz") : (ext != "stl" && ext != "ply"))
+    return usage("OUTPUT " + output + ": --mesh " + mode + " writes " +
+                 (mode == "points" ? ".ply, .pcd or .xyz" : ".stl or .ply"));
+  if (!bpa_config.radii_m.empty() && mode != "bpa") return usage("--radii is only used with --mesh bpa");
+  if (!vdb.empty() && fileExtension(vdb) != "vdb") return usage("--vdb " + vdb + ": must end in .vdb");
+  try {
+    for (const std::string& path : {output, vdb}) {  // before the work, not after it
+      if (path.empty()) continue;
+      const std::string problem = outputFileProblem(path);
+      if (!problem.empty()) throw IoError(path, "cannot write: " + problem);
+    }
+    FusedMap fused(config);
+    std::vector<std::string> skipped;
+    const size_t scans = integrateMapDirectory(fused, map_dir, skip_bad ? &skipped : nullptr);
+    for (const std::string& w : skipped) std::cerr << "fuse_map: warning: skipped: " << w << "\n";
+    const FusedMapStats& st = fused.stats();
+
+    const auto t_mesh = std::chrono::steady_clock::now();
+    size_t surface_points = 0;
+    TriangleMesh mesh;
+    if (mode == "marching_cubes") {
+      mesh = fused.extractMesh();
+    } else {
+      ScanPoints sp = fused.surfacePoints();
+      surface_points = sp.size();
+      if (mode == "points") {
+        PointCloud cloud;
+        cloud.points = std::move(sp.points);
+        cloud.normals = std::move(sp.normals);
+        cloud.setUnorganized();
+        writeCloud(output, cloud);
+      } else {
+        mesh = buildMesh(sp, bpa_config).mesh;
+      }
+    }
+    const double mesh_seconds = since(t_mesh);
+    if (mode != "points") {
+      if (mesh.faces.empty()) throw std::runtime_error("nothing to mesh: the fused map has no observed surface");
+      writeMesh(output, mesh);
+    }
+    if (!vdb.empty()) fused.save(vdb);
+    const MeshTopology t = mode == "points" ? MeshTopology() : analyzeTopology(mesh);
+
+    if (json) {
+      std::cout << "{\"map\": " << jsonString(map_dir) << ", \"output\": " << jsonString(output)
+                << ", \"mesh\": " << jsonString(mode) << ", \"scans\": " << scans << ", \"points\": " << st.points
+                << ", \"skipped_points\": " << st.skipped_points << ", \"voxel_m\": " << jsonNumber(config.voxel_m)
+                << ", \"truncation_m\": " << jsonNumber(config.truncation_m)
+                << ", \"carve_m\": " << jsonNumber(config.carve_m) << ", \"splat\": " << config.splat << ", \"voxels\": " << fused.activeVoxels()
+                << ", \"observed_voxels\": " << fused.observedVoxels() << ", \"memory_bytes\": " << fused.memoryBytes()
+                << ", \"voxel_updates\": " << st.voxel_updates
+                << ", \"integrate_seconds\": " << jsonNumber(st.integrate_seconds)
+                << ", \"mesh_seconds\": " << jsonNumber(mesh_seconds) << ", \"surface_points\": " << surface_points
+                << ", \"triangles\": " << t.faces << ", \"vertices\": " << t.vertices
+                << ", \"boundary_edges\": " << t.boundary_edges << ", \"nonmanifold_edges\": " << t.nonmanifold_edges
+                << ", \"nonmanifold_vertices\": " << t.nonmanifold_vertices << ", \"components\": " << t.components
+                << "}" << std::endl;
+    } else {
+      std::cout << "map:          " << map_dir << " (" << scans << " scans, " << st.points << " readings, "
+                << st.skipped_points << " skipped)\n"
+                << "fused:        " << fused.activeVoxels() << " voxels (" << fused.observedVoxels()
+                << " seen by >= " << config.min_weight << " readings), " << fused.memoryBytes() / 1048576.0
+                << " MB; voxel " << config.voxel_m << " m, truncation " << config.truncation_m << " m, carve "
+                << config.carve_m << " m, splat " << config.splat << "\n"
+                << "integration:  " << st.integrate_seconds << " s (" << st.voxel_updates << " voxel updates)\n";
+      if (mode != "marching_cubes") std::cout << "surface:      " << surface_points << " points with normals\n";
+      if (mode != "points")
+        std::cout << "mesh:         " << mode << ", " << t.faces << " triangles, " << t.vertices << " vertices, "
+                  << t.components << " components, " << t.boundary_edges << " boundary edges, "
+                  << t.nonmanifold_edges << " non-manifold edges, " << t.nonmanifold_vertices
+                  << " non-manifold vertices\n";
+      std::cout << "meshing:      " << mesh_seconds << " s\n"
+                << "written:      " << output << (vdb.empty() ? "" : " and " + vdb) << std::endl;
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "fuse_map: " << e.what() << std::endl;
+    return 1;
+  }
+}
