@@ -10,6 +10,7 @@
 
 #include "scanstop_common/error.h"
 #include "scanstop_eval/surface_accuracy.h"
+#include "room_with_box.h"
 #include "scanstop_sim/world_builder.h"
 
 using namespace scanstop;
@@ -17,19 +18,7 @@ using namespace scanstop::eval;
 
 namespace {
 
-constexpr double kT = sim::WorldBuilder::kWallThickness / 2;
-
-/// A 4 x 3 x 2.5 m room, interior [0, 4] x [0, 3], with a 1 x 1 x 0.8 m box in it.
-TriangleMesh roomWithBox() {
-  sim::WorldBuilder b(2.5);
-  b.floorAndCeiling(-2 * kT, -2 * kT, 4 + 2 * kT, 3 + 2 * kT);
-  b.wallX(-kT, -2 * kT, 4 + 2 * kT);
-  b.wallX(3 + kT, -2 * kT, 4 + 2 * kT);
-  b.wallY(-kT, -2 * kT, 3 + 2 * kT);
-  b.wallY(4 + kT, -2 * kT, 3 + 2 * kT);
-  b.box(Eigen::Vector3d(2.5, 1.0, 0.0), Eigen::Vector3d(3.5, 2.0, 0.8));
-  return b.mesh();
-}
+using test::roomWithBox;
 
 /// Every face split into k^2 congruent triangles (k = ceil(longest edge / edge_m)): the same surface
 /// in small pieces, as a mesher's output would be (a soup).

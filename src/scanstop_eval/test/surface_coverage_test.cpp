@@ -9,6 +9,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_eval/surface_coverage.h"
+#include "room_with_box.h"
 #include "scanstop_sim/world_builder.h"
 
 using namespace scanstop;
@@ -16,20 +17,7 @@ using namespace scanstop::eval;
 
 namespace {
 
-constexpr double kT = sim::WorldBuilder::kWallThickness / 2;
-
-/// A 4 x 3 x 2.5 m room, interior [0, 4] x [0, 3], with a 1 x 1 x 0.8 m box in it whose far side
-/// the start cannot see.
-TriangleMesh roomWithBox() {
-  sim::WorldBuilder b(2.5);
-  b.floorAndCeiling(-2 * kT, -2 * kT, 4 + 2 * kT, 3 + 2 * kT);
-  b.wallX(-kT, -2 * kT, 4 + 2 * kT);
-  b.wallX(3 + kT, -2 * kT, 4 + 2 * kT);
-  b.wallY(-kT, -2 * kT, 3 + 2 * kT);
-  b.wallY(4 + kT, -2 * kT, 3 + 2 * kT);
-  b.box(Eigen::Vector3d(2.5, 1.0, 0.0), Eigen::Vector3d(3.5, 2.0, 0.8));
-  return b.mesh();
-}
+using test::roomWithBox;
 
 struct Fixture {
   Fixture() : start(1.0, 1.5, 0.0), sim(sim::World::fromMesh(roomWithBox(), "room"), config(), start) {}

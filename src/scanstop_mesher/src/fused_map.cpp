@@ -1,6 +1,5 @@
 #include "scanstop_mesher/fused_map.h"
 
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <chrono>
@@ -366,16 +365,8 @@ void FusedMap::save(const std::string& path) const {
 }
 
 size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vector<std::string>* skipped) {
-  // Reading must not create anything (MapDirectory would create a missing directory).
-  struct stat st;
-  if (::stat((dir + "/poses.csv").c_str(), &st) != 0)
-    throw IoError(dir + "/poses.csv", "does not exist (no scan in the map yet)");
-  const MapDirectory map(dir);
-  for (const MapProblem& p : map.problems()) {
-    if (!skipped) throw IoError(dir, p.message());
-    skipped->push_back(p.message());
-  }
-  if (map.size() == 0) throw IoError(map.posesPath(), "the map has no scans");
+  const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, skipped);
+  const MapDirectory& map = *opened;
   size_t loaded = 0;
   std::vector<Eigen::Vector3f> points;
   for (size_t s = 0; s < map.size(); ++s) {

@@ -33,17 +33,23 @@ std::vector<Eigen::Vector3d> toDouble(const std::vector<Eigen::Vector3f>& pts) {
 
 }  // namespace
 
-ScanPoints loadMapDirectory(const std::string& dir, std::vector<std::string>* skipped) {
+std::unique_ptr<const MapDirectory> openMapDirectory(const std::string& dir, std::vector<std::string>* skipped) {
   // Reading must not create anything (MapDirectory would create a missing directory).
   struct stat st;
   if (::stat((dir + "/poses.csv").c_str(), &st) != 0)
     throw IoError(dir + "/poses.csv", "does not exist (no scan in the map yet)");
-  const MapDirectory map(dir);
-  for (const MapProblem& p : map.problems()) {
+  auto map = std::make_unique<const MapDirectory>(dir);
+  for (const MapProblem& p : map->problems()) {
     if (!skipped) throw IoError(dir, p.message());
     skipped->push_back(p.message());
   }
-  if (map.size() == 0) throw IoError(map.posesPath(), "the map has no scans");
+  if (map->size() == 0) throw IoError(map->posesPath(), "the map has no scans");
+  return map;
+}
+
+ScanPoints loadMapDirectory(const std::string& dir, std::vector<std::string>* skipped) {
+  const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, skipped);
+  const MapDirectory& map = *opened;
   ScanPoints out;
   size_t loaded = 0;
   for (size_t s = 0; s < map.size(); ++s) {

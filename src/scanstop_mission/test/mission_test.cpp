@@ -1042,29 +1042,25 @@ TEST(Mission, TheLegCheckStopsBeforeAnObstacleTheLatestScanShowsAndTheMapDoesNot
   ASSERT_EQ(saved.obstructions.size(), 1u);
   EXPECT_TRUE(saved.obstructions[0].point.isApprox(s.obstructions[0].point, 1e-6));
   EXPECT_TRUE(saved.contacts.empty());
+  // The same mission with another setting: its collisions and its first forward motion.
+  const auto variant = [&sys](const std::function<void(MissionConfig&)>& set) {
+    TempDir other_dir;
+    FakeSystem other;
+    other.walls = sys.walls;
+    other.targets = sys.targets;
+    other.scan_walls = true;
+    MissionConfig other_config = config(other_dir.path());
+    set(other_config);
+    Mission other_mission(other_config, other, quiet, quiet);
+    EXPECT_EQ(other_mission.run(), State::Done);
+    return std::make_pair(other_mission.snapshot().collisions, other.forwards.front());
+  };
   // Off, the same mission drives into the wall.
-  TempDir dir2;
-  FakeSystem off_sys;
-  off_sys.walls = sys.walls;
-  off_sys.targets = sys.targets;
-  off_sys.scan_walls = true;
-  MissionConfig off = config(dir2.path());
-  off.leg_check = false;
-  Mission m2(off, off_sys, quiet, quiet);
-  EXPECT_EQ(m2.run(), State::Done);
-  EXPECT_EQ(m2.snapshot().collisions, 1);
+  EXPECT_EQ(variant([](MissionConfig& off) { off.leg_check = false; }).first, 1);
   // Without the standoff it stops leg_check_margin before the wall.
-  TempDir dir3;
-  FakeSystem near_sys;
-  near_sys.walls = sys.walls;
-  near_sys.targets = sys.targets;
-  near_sys.scan_walls = true;
-  MissionConfig near = config(dir3.path());
-  near.obstruction_standoff_m = 0.0;
-  Mission m3(near, near_sys, quiet, quiet);
-  EXPECT_EQ(m3.run(), State::Done);
-  EXPECT_EQ(m3.snapshot().collisions, 0);
-  EXPECT_NEAR(near_sys.forwards.front(), 1.5 - near.leg_check_radius_m - near.leg_check_margin_m, 0.02);
+  const auto [near_collisions, near_forward] = variant([](MissionConfig& near) { near.obstruction_standoff_m = 0.0; });
+  EXPECT_EQ(near_collisions, 0);
+  EXPECT_NEAR(near_forward, 1.5 - c.leg_check_radius_m - c.leg_check_margin_m, 0.02);
 }
 
 TEST(Mission, ScanBudgetEndsTheMission) {

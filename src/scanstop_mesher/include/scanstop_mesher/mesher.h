@@ -6,10 +6,12 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "scanstop_common/cloud.h"
+#include "scanstop_common/map_dir.h"
 #include "scanstop_mesher/ball_pivoting.h"
 #include "scanstop_mesher/mesh_analysis.h"
 
@@ -30,6 +32,11 @@ struct ScanPoints {
 /// `skipped` given, a scan file that cannot be read is skipped instead and its problem (naming the
 /// file) appended there (IoError still when no scan is left).
 ScanPoints loadMapDirectory(const std::string& dir, std::vector<std::string>* skipped = nullptr);
+
+/// A map directory opened for reading, strictly (loadMapDirectory, integrateMapDirectory): creates
+/// nothing; throws IoError naming the file for a missing poses.csv, any problem of the directory
+/// (with `skipped` given, its problems are appended there instead) or a map without scans.
+std::unique_ptr<const MapDirectory> openMapDirectory(const std::string& dir, std::vector<std::string>* skipped);
 
 /// Where a mesh may be written: `path` (relative ones are taken relative to allowed_dir) resolved
 /// to an absolute path whose directory exists and lies inside allowed_dir (after resolving '..',
