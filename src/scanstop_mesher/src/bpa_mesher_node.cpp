@@ -14,6 +14,7 @@
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
+#include "scanstop_mesher/fused_map.h"
 
 namespace scanstop {
 namespace mesher {
@@ -29,6 +30,9 @@ void MesherNodeConfig::validate() const {
   requireInRange("max_display_triangles", max_display_triangles, 1, 100000000);
   requireNonNegative("map_cloud_voxel_m", map_cloud_voxel_m, "m");
   requirePositive("map_poll_s", map_poll_s, "s");
+  requireOneOf("mesh_method", mesh_method, {"bpa", "marching_cubes", "fused_bpa"});
+  requireInRange("fused_voxel_m", fused_voxel_m, 0.005, 0.5, "m");
+  requireInRange("fused_carve_m", fused_carve_m, 0.0, 1000.0, "m");
   if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
   if (!default_output.empty()) {
     const std::string ext = fileExtension(default_output);
@@ -68,6 +72,9 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "publish_map", c.publish_map);
   ros_params::optional(pnh, "map_cloud_voxel_m", c.map_cloud_voxel_m);
   ros_params::optional(pnh, "map_poll_s", c.map_poll_s);
+  ros_params::optional(pnh, "mesh_method", c.mesh_method);
+  ros_params::optional(pnh, "fused_voxel_m", c.fused_voxel_m);
+  ros_params::optional(pnh, "fused_carve_m", c.fused_carve_m);
   c.validate();
   coloring_ = parseColoring(c.color_mode, "color_mode");
 
@@ -152,6 +159,10 @@ bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop
 
 void BpaMesherNode::buildAndPublish(const scanstop_msgs::BuildMesh::Request& req, const MesherConfig& mc,
                                     const std::string& output, scanstop_msgs::BuildMesh::Response& res) {
+  if (req.input_path.empty() && isFusedMeshMethod(config_.mesh_method)) {
+    buildFusedAndPublish(mc, output, res);
+    return;
+  }
   ScanPoints points;
   std::string source;
   std::vector<std::string> skipped;
@@ -178,6 +189,30 @@ void BpaMesherNode::buildAndPublish(const scanstop_msgs::BuildMesh::Request& req
   for (double x : r.radii_m) msg << " " << x;
   msg << " m; " << r.topology.nonmanifold_edges << " non-manifold edges, " << r.topology.nonmanifold_vertices
       << " non-manifold vertices)";
+  for (const std::string& s : skipped) msg << "; " << s;
+  res.message = msg.str();
+  ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
+}
+
+void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::string& output,
+                                         scanstop_msgs::BuildMesh::Response& res) {
+  FusedMapConfig fc;
+  fc.voxel_m = config_.fused_voxel_m;
+  fc.truncation_m = 3.0 * config_.fused_voxel_m;
+  fc.carve_m = config_.fused_carve_m;
+  std::vector<std::string> skipped;
+  const FusedMesh r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped);
+  for (const std::string& s : skipped) ROS_ERROR("bpa_mesher_node: %s", s.c_str());
+  writeMesh(output, r.mesh);
+  publishMesh(r.mesh, output);
+  res.success = true;
+  res.points = static_cast<uint32_t>(r.surface_points);
+  res.triangles = static_cast<uint32_t>(r.mesh.faces.size());
+  res.file = output;
+  std::ostringstream msg;
+  msg << r.mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << r.scans
+      << " scans of map " << config_.map_dir << " (voxel " << fc.voxel_m << " m, " << r.voxels << " voxels, "
+      << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s)";
   for (const std::string& s : skipped) msg << "; " << s;
   res.message = msg.str();
   ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());

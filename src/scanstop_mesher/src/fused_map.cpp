@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 #include <openvdb/io/File.h>
@@ -387,6 +388,32 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
   }
   if (loaded == 0) throw IoError(dir, "none of its " + std::to_string(map.size()) + " scan files could be read");
   return loaded;
+}
+
+bool isFusedMeshMethod(const std::string& method) { return method == "marching_cubes" || method == "fused_bpa"; }
+
+FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
+                                const MesherConfig& bpa, std::vector<std::string>* skipped) {
+  if (!isFusedMeshMethod(method))
+    throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
+  FusedMap fused(config);
+  FusedMesh out;
+  out.scans = integrateMapDirectory(fused, dir, skipped);
+  out.integrate_s = fused.stats().integrate_seconds;
+  out.voxels = fused.activeVoxels();
+  out.memory_bytes = fused.memoryBytes();
+  const auto start = std::chrono::steady_clock::now();
+  if (method == "marching_cubes") {
+    out.mesh = fused.extractMesh();
+  } else {
+    const ScanPoints surface = fused.surfacePoints();
+    out.surface_points = surface.size();
+    if (surface.size() > 0) out.mesh = buildMesh(surface, bpa).mesh;
+  }
+  out.mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (out.mesh.faces.empty())
+    throw std::runtime_error("nothing to mesh: the fused map of " + dir + " holds no observed surface");
+  return out;
 }
 
 }  // namespace mesher

@@ -29,22 +29,7 @@ double jsonValue(const std::string& json, const std::string& key) {
   return std::stod(json.substr(at + key.size() + 4));
 }
 
-/// A map directory with two scans of the synthetic room, robot poses (0, 0, 0) and (-1, 0.5, 90 deg).
-void writeRoomMap(const std::string& dir) {
-  MapDirectory map(dir);
-  const Pose2D poses[2] = {Pose2D(0.0, 0.0, 0.0), Pose2D(-1.0, 0.5, M_PI / 2)};
-  for (uint32_t i = 0; i < 2; ++i) {
-    MapScanInfo info;
-    info.index = i;
-    info.map_pose = poses[i];
-    info.sensor_origin = Eigen::Vector3d(0.0, 0.0, 0.45);
-    const Eigen::Isometry3f T_map_base = poses[i].toIsometry3f();
-    const Eigen::Vector3f origin = T_map_base * info.sensor_origin.cast<float>();
-    PointCloud base;
-    for (const auto& p : test::scanRoom(origin, 400, 1000, 0.005f, i + 1)) base.push_back(T_map_base.inverse() * p);
-    map.append(info, base);
-  }
-}
+using test::writeRoomMap;
 
 }  // namespace
 

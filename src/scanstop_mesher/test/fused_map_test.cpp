@@ -1,15 +1,20 @@
 // The fused TSDF map (issue #20): free-space carving, noise averaging on a plane, Marching Cubes of
-// a sphere (closed, manifold, within the voxel tolerance), unseen space stays a hole.
+// a sphere (closed, manifold, within the voxel tolerance), unseen space stays a hole, a map directory
+// meshed by either fused method.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "scanstop_common/cli_test.h"
 #include "scanstop_common/error.h"
 #include "scanstop_mesher/fused_map.h"
 #include "scanstop_mesher/mesh_analysis.h"
+#include "synthetic_room.h"
 
 using namespace scanstop;
 using namespace scanstop::mesher;
@@ -310,4 +315,47 @@ TEST(FusedMap, SplatClosesTheGapsBetweenSparseBeams) {
   EXPECT_EQ(t1.boundary_loops, 1u);
   EXPECT_TRUE(t1.manifold());
   EXPECT_GT(t1.faces, 3500u);  // the 1 m x 1 m wall: 2500 cells of 2 cm, two triangles each, less the rim
+}
+
+namespace {
+
+/// Distance [m] from p to the synthetic room's surfaces (its inner faces and the box on the floor).
+float roomSurfaceDistance(const Eigen::Vector3f& p) {
+  const test::Box room = test::roomBounds(), box = test::roomObstacle();
+  const float to_room = std::min((p - room.lo).minCoeff(), (room.hi - p).minCoeff());
+  const Eigen::Vector3f outside = (box.lo - p).cwiseMax(p - box.hi).cwiseMax(0.0f);
+  const float inside = std::min((p - box.lo).minCoeff(), (box.hi - p).minCoeff());
+  const float to_box = outside.norm() > 0.0f ? outside.norm() : inside;
+  return std::min(std::abs(to_room), to_box);
+}
+
+}  // namespace
+
+TEST(FusedMap, AMapDirectoryIsMeshedByEitherFusedMethod) {
+  // bpa_mesher_node's mesh_method: two scans of the synthetic room (5 mm noise) through the fused
+  // map, by Marching Cubes and by Ball Pivoting of its surface points; the vertices lie on the
+  // room's surfaces (the TSDF rounds the box's convex edges by up to about 2 cm: a few vertices).
+  test_util::TempDir tmp("fused_map_test");
+  test::writeRoomMap(tmp.path + "/map");
+  FusedMapConfig config;
+  config.carve_m = 0.2;
+  for (const std::string method : {"marching_cubes", "fused_bpa"}) {
+    const FusedMesh m = meshFusedMapDirectory(tmp.path + "/map", config, method, MesherConfig());
+    EXPECT_EQ(m.scans, 2u) << method;
+    EXPECT_GT(m.mesh.faces.size(), 50000u) << method;
+    EXPECT_GT(m.voxels, 100000u) << method;
+    size_t off = 0;
+    double sum = 0.0;
+    for (const auto& v : m.mesh.vertices) {
+      const float d = roomSurfaceDistance(v);
+      sum += d;
+      off += d > 0.02f ? 1 : 0;
+    }
+    EXPECT_LT(sum / m.mesh.vertices.size(), 0.003) << method;
+    EXPECT_LT(off, m.mesh.vertices.size() / 200) << method;
+    EXPECT_EQ(m.surface_points > 0, method == "fused_bpa") << method;
+  }
+  EXPECT_FALSE(isFusedMeshMethod("bpa"));
+  EXPECT_THROW(meshFusedMapDirectory(tmp.path + "/map", config, "bpa", MesherConfig()), std::invalid_argument);
+  EXPECT_THROW(meshFusedMapDirectory(tmp.path + "/missing", config, "marching_cubes", MesherConfig()), IoError);
 }

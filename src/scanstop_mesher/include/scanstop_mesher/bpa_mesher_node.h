@@ -38,6 +38,12 @@ struct MesherNodeConfig {
   bool publish_map = false;            ///< publish map_dir's points, path, scan poses and base_link (viewing)
   double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)
   double map_poll_s = 2.0;             ///< period [s] of checking map_dir and load_mesh for changes
+  /// How build_mesh meshes the map (an empty input_path): "bpa" (Ball Pivoting of the map's points),
+  /// "marching_cubes" (of the fused TSDF map, fused_map.h) or "fused_bpa" (Ball Pivoting of the fused
+  /// map's surface points). A cloud file (input_path) is always meshed by Ball Pivoting.
+  std::string mesh_method = "bpa";
+  double fused_voxel_m = 0.02;         ///< voxel of the fused map [m], [0.005, 0.5]
+  double fused_carve_m = 0.2;          ///< free space carved before each hit along its beam [m], [0, 1000]
   void validate() const;
   /// output_dir, or the directory it defaults to ("" when there is none).
   std::string allowedOutputDir() const;
@@ -55,6 +61,8 @@ class BpaMesherNode {
   /// every large buffer is released when it returns.
   void buildAndPublish(const scanstop_msgs::BuildMesh::Request& req, const MesherConfig& mc, const std::string& output,
                        scanstop_msgs::BuildMesh::Response& res);
+  /// build_mesh of the map by a fused mesh_method (marching_cubes, fused_bpa).
+  void buildFusedAndPublish(const MesherConfig& mc, const std::string& output, scanstop_msgs::BuildMesh::Response& res);
   /// Shows `mesh` (the contents of `file`) to the current subscribers; later subscribers get it from
   /// `file` (onMarkerSubscriber).
   void publishMesh(const TriangleMesh& mesh, const std::string& file);
