@@ -343,13 +343,30 @@ void writeXyz(const std::string& path, const PointCloud& cloud) {
   writeFileAtomic(path, out.str());
 }
 
+std::string coordinateProblem(const std::vector<Eigen::Vector3f>& points, const char* what) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
+    if (p.hasNaN() || p.cwiseAbs().maxCoeff() <= kMaxFileCoordinateM) continue;
+    std::ostringstream o;
+    o << what << ' ' << i << " (" << p.x() << ", " << p.y() << ", " << p.z()
+      << ") lies beyond the 100000 m coordinate limit";
+    return o.str();
+  }
+  return {};
+}
+
 PointCloud readCloud(const std::string& path) {
   const std::string problem = inputFileProblem(path);  // before the extension: a missing "x" is not "format '.'"
   if (!problem.empty()) throw IoError(path, problem);
   const std::string ext = fileExtension(path);
-  if (ext == "pcd") return readPcd(path);
-  if (ext == "ply") return readPlyCloud(path);
-  if (ext == "xyz" || ext == "txt") return readXyz(path);
+  const auto checked = [&path](PointCloud cloud) {
+    const std::string far = coordinateProblem(cloud.points);
+    if (!far.empty()) throw IoError(path, far);
+    return cloud;
+  };
+  if (ext == "pcd") return checked(readPcd(path));
+  if (ext == "ply") return checked(readPlyCloud(path));
+  if (ext == "xyz" || ext == "txt") return checked(readXyz(path));
   throw IoError(path, ext.empty() ? std::string("no file extension: unknown point-cloud format (expected .pcd, .ply or .xyz)")
                                   : "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
 }
@@ -370,7 +387,12 @@ TriangleMesh readMesh(const std::string& path) {
   if (!problem.empty()) throw IoError(path, problem);
   const std::string ext = fileExtension(path);
   if (ext == "stl") return readStl(path);
-  if (ext == "ply") return readPly(path);
+  if (ext == "ply") {
+    TriangleMesh mesh = readPly(path);
+    const std::string far = coordinateProblem(mesh.vertices, "vertex");
+    if (!far.empty()) throw IoError(path, far);
+    return mesh;
+  }
   throw IoError(path, "unknown mesh format '." + ext + "' (expected .stl or .ply)");
 }
 

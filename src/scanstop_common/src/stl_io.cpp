@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
 
@@ -15,15 +16,12 @@ namespace {
 
 constexpr size_t kHeaderBytes = 84;
 constexpr size_t kTriangleBytes = 50;
-/// Vertices farther from the origin than this (on any axis) are refused (issue #22 class 3: one vertex
-/// at 1e30 m made a world's grid overflow). 100 km: far beyond any world or building mesh.
-constexpr float kMaxVertexCoordinateM = 1e5f;
 
 void addTriangle(TriangleMesh& mesh, const Eigen::Vector3f v[3], size_t index, const std::string& name) {
   for (int k = 0; k < 3; ++k) {
     if (!v[k].allFinite())
       throw IoError(name, "triangle " + std::to_string(index) + " has a non-finite (NaN or infinite) coordinate");
-    if (v[k].cwiseAbs().maxCoeff() > kMaxVertexCoordinateM) {
+    if (v[k].cwiseAbs().maxCoeff() > kMaxFileCoordinateM) {
       std::ostringstream where;
       where << "triangle " << index << " vertex " << k + 1 << " (" << v[k].x() << ", " << v[k].y() << ", " << v[k].z()
             << ") lies beyond the 100000 m coordinate limit";

@@ -131,6 +131,25 @@ TEST(CloudIo, MalformedInputsNameFileAndProblem) {
   expectIoError([&] { writeCloud(dir.file("w.pcd"), broken); }, dir.file("w.pcd"), "inconsistent cloud");
 }
 
+// Issue #22 class 3: a point at 1e30 m went into fuse_map's and plan_step's grids unnoticed.
+TEST(CloudIo, CoordinatesBeyondTheLimitAreRefusedNamingThePoint) {
+  TempDir dir;
+  const std::string pcd = dir.write("far.pcd",
+                                    "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                                    "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n1 0 0\n0 1 0\n1e30 0 0\n");
+  expectIoError([&] { readCloud(pcd); }, pcd, "point 2 (1e+30, 0, 0) lies beyond the 100000 m coordinate limit");
+  const std::string xyz = dir.write("inf.xyz", "1 2 3\nnan nan nan\n4 -inf 6\n");
+  expectIoError([&] { readCloud(xyz); }, xyz, "point 2 (4, -inf, 6) lies beyond the 100000 m coordinate limit");
+  const std::string mesh = dir.write("far.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                                "property float y\nproperty float z\nelement face 1\n"
+                                                "property list uchar int vertex_indices\nend_header\n"
+                                                "0 0 0\n1 0 0\n0 200000 0\n3 0 1 2\n");
+  expectIoError([&] { readMesh(mesh); }, mesh, "vertex 2 (0, 200000, 0) lies beyond the 100000 m coordinate limit");
+  // NaN points (missing returns of an organized scan) and points within the limit are kept.
+  const std::string ok = dir.write("ok.xyz", "1 2 3\nnan nan nan\n99999 -99999 0\n");
+  EXPECT_EQ(readCloud(ok).size(), 3u);
+}
+
 TEST(CloudIo, AtomicWriteLeavesNoTemporaryFiles) {
   TempDir dir;
   writeFileAtomic(dir.file("f.txt"), "one");

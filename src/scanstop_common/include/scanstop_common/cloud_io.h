@@ -5,14 +5,25 @@
 /// (temporary file, fsync, rename). NaN points survive a round trip in every format.
 
 #include <string>
+#include <vector>
 
 #include "scanstop_common/cloud.h"
 
 namespace scanstop {
 
+/// Coordinates farther from the origin than this on any axis (or infinite) are refused by the readers
+/// of clouds, meshes and STL worlds (issue #22 class 3: one point or vertex at 1e30 m made a grid
+/// overflow or a tool compute on nonsense). 100 km: far beyond any building. NaN points are kept
+/// (organized clouds mark missing returns with them).
+constexpr float kMaxFileCoordinateM = 1e5f;
+
+/// "point 7 (1e+30, 0, 0) lies beyond the 100000 m coordinate limit" for the first such point of
+/// `points` (`what` names the element: "point", "vertex"), or "" when there is none.
+std::string coordinateProblem(const std::vector<Eigen::Vector3f>& points, const char* what = "point");
+
 /// Reads a cloud, choosing the format from the extension (.pcd, .ply, .xyz/.txt).
 /// PLY and PCD normals (nx ny nz / normal_x normal_y normal_z) and PCD "range" are kept;
-/// PCD organization (width x height) is kept.
+/// PCD organization (width x height) is kept. A point beyond kMaxFileCoordinateM is an IoError.
 PointCloud readCloud(const std::string& path);
 
 /// Writes a cloud in the format given by the extension (.pcd binary, .ply binary, .xyz).
@@ -43,7 +54,7 @@ PointCloud readXyz(const std::string& path);
 PointCloud parseXyz(const std::string& data, const std::string& name);
 void writeXyz(const std::string& path, const PointCloud& cloud);
 
-/// Reads a mesh by extension: .stl (soup) or .ply (indexed).
+/// Reads a mesh by extension: .stl (soup) or .ply (indexed). A vertex beyond kMaxFileCoordinateM is an IoError.
 TriangleMesh readMesh(const std::string& path);
 /// Writes a mesh by extension: .stl (binary) or .ply (binary, with normals when present).
 void writeMesh(const std::string& path, const TriangleMesh& mesh);
