@@ -14,6 +14,7 @@
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/map_check.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
 #include "scanstop_eval/surface_coverage.h"
@@ -262,7 +263,7 @@ const char* kindName(AccuracyInput::Kind kind) {
   return "?";
 }
 
-AccuracyInput loadAccuracyInput(const std::string& path) {
+AccuracyInput loadAccuracyInput(const std::string& path, bool skip_bad) {
   AccuracyInput in;
   in.path = path;
   struct stat st;
@@ -272,14 +273,14 @@ AccuracyInput loadAccuracyInput(const std::string& path) {
     if (::stat((path + "/poses.csv").c_str(), &poses) != 0)
       throw IoError(path, "a directory without poses.csv: not a map directory");
     in.kind = AccuracyInput::Kind::MapDirectory;
-    const MapDirectory map(path);
-    for (const MapProblem& p : map.problems()) in.problems.push_back(p.message());
+    const MapDirectory map = openMapForTool(path, skip_bad, [&in](const std::string& p) { in.problems.push_back(p); });
     for (size_t i = 0; i < map.size(); ++i) {
       PointCloud cloud;
       try {
         cloud = map.loadScanInMap(i);
       } catch (const std::exception& e) {
-        in.problems.push_back("scan " + std::to_string(map.scans()[i].index) + " skipped: " + e.what());
+        if (!skip_bad) throw;
+        in.problems.push_back("skipped: scan " + std::to_string(map.scans()[i].index) + ": " + e.what());
         continue;
       }
       for (const Eigen::Vector3f& p : cloud.points)
@@ -294,6 +295,8 @@ AccuracyInput loadAccuracyInput(const std::string& path) {
       in.mesh = readStl(path);
     } else if (ext == ".ply") {
       TriangleMesh m = readPly(path);
+      const std::string far = coordinateProblem(m.vertices, "vertex");
+      if (!far.empty()) throw IoError(path, far);
       if (m.faces.empty()) {
         in.kind = AccuracyInput::Kind::Cloud;
         for (const Eigen::Vector3f& p : m.vertices)

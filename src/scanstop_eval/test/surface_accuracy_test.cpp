@@ -5,10 +5,13 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <stdlib.h>
 #include <vector>
 
 #include "scanstop_common/error.h"
+#include "scanstop_common/map_dir.h"
 #include "scanstop_eval/surface_accuracy.h"
 #include "room_with_box.h"
 #include "scanstop_sim/world_builder.h"
@@ -222,4 +225,35 @@ TEST(SurfaceAccuracy, BadInputsAreNamed) {
   bad = AccuracyConfig();
   bad.sample_spacing_m = 0.0;
   EXPECT_THROW(measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(f.world_mesh), f.start, bad), ConfigError);
+}
+
+TEST(SurfaceAccuracy, AMapWithABadScanIsRefusedByNameUnlessSkipBad) {
+  // Issue #22 class 2: a map directory with a missing scan file was measured on the rest, exit 0.
+  char tmpl[] = "/tmp/scanstop_accuracy_map_XXXXXX";
+  const std::string dir = ::mkdtemp(tmpl);
+  {
+    MapDirectory map(dir);
+    PointCloud cloud;
+    cloud.points = {Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0, 1, 0), Eigen::Vector3f(0, 0, 1)};
+    cloud.setUnorganized();
+    for (uint32_t i = 0; i < 3; ++i) {
+      MapScanInfo info;
+      info.index = i;
+      info.map_pose = Pose2D(0.5 * i, 0, 0);
+      map.append(info, cloud);
+    }
+  }
+  ASSERT_EQ(std::remove((dir + "/scans/scan_0001.pcd").c_str()), 0);
+  try {
+    loadAccuracyInput(dir);
+    ADD_FAILURE() << "a map with a missing scan file was measured";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir + "/scans/scan_0001.pcd: no such file"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--skip-bad"), std::string::npos) << e.what();
+  }
+  const AccuracyInput rest = loadAccuracyInput(dir, true);
+  EXPECT_EQ(rest.scans, 2u);
+  EXPECT_EQ(rest.points.size(), 6u);
+  ASSERT_EQ(rest.problems.size(), 1u);
+  EXPECT_NE(rest.problems[0].find("scan_0001.pcd"), std::string::npos) << rest.problems[0];
 }

@@ -19,6 +19,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: surface_accuracy WORLD.stl INPUT [--start x,y,yaw] [--tolerance M] [--sample M] [--planes N] [--json]\n"
+    "                        [--skip-bad]\n"
     "  WORLD.stl      the simulated world (sim_node's ~world)\n"
     "  INPUT          what is measured, in the map frame: a mesh (.ply with faces, .stl), a point cloud (.ply\n"
     "                 without faces, .pcd, .xyz, .txt) or a map directory (every scan at its final map pose)\n"
@@ -33,6 +34,8 @@ constexpr const char* kUsage =
     "  --no-coverage  distances only: no visible surface (no simulated scans)\n"
     "  --json         one JSON object on stdout instead of the text report\n"
     "  --quiet        no progress on stderr\n"
+    "  --skip-bad     measure a map directory without its bad scans or lines (each named in a warning); without\n"
+    "                 it a bad one is an error that names it\n"
     "exit status: 0 done, 2 bad arguments, 1 unreadable world or input, or a bad start pose\n";
 
 using scanstop::jsonNumber;
@@ -62,7 +65,7 @@ void printStats(const char* what, const DistanceStats& s) {
 int main(int argc, char** argv) {
   using namespace scanstop;
   std::string world_path, input_path, start_text, planes_text = "400";
-  bool json = false, quiet = false, no_coverage = false;
+  bool json = false, quiet = false, no_coverage = false, skip_bad = false;
   eval::AccuracyConfig config;
   eval::OracleConfig oracle;
   oracle.robot_radius_m = RobotBody().radius_m + explorer::BodyMargins().inflation_margin_m;
@@ -81,6 +84,7 @@ int main(int argc, char** argv) {
       .real("--surface-cell", oracle.surface_cell_m, 0.01, 1.0)
       .real("--grid", oracle.grid_m, 0.05, 10.0)
       .flag("--no-coverage", no_coverage)
+      .flag("--skip-bad", skip_bad)
       .flag("--json", json)
       .flag("--quiet", quiet);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
@@ -100,10 +104,10 @@ int main(int argc, char** argv) {
     const std::unique_ptr<sim::Simulator> sim =
         sim::makeSimulator(world_path, sim::WorldOptions(), sim_config, start_text, "--start", &start);
     // The input before the long part, so that a bad one is named at once.
-    const eval::AccuracyInput input = eval::loadAccuracyInput(input_path);
+    const eval::AccuracyInput input = eval::loadAccuracyInput(input_path, skip_bad);
     const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (const std::string& p : input.problems)
-      if (!quiet) std::cerr << "surface_accuracy: " << input_path << ": " << p << "\n";
+      std::cerr << "surface_accuracy: warning: " << p << "\n";  // also with --quiet: data was left out
     const eval::WorldSurfaceDistance world(sim->world().mesh());
     std::unique_ptr<eval::VisibleSurface> visible;
     double visible_s = 0.0;

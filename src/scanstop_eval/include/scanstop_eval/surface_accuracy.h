@@ -91,8 +91,10 @@ struct AccuracyInput {
 };
 /// Reads by kind: a directory is a map directory (it must hold poses.csv), else by extension. Throws
 /// IoError naming the path: missing, not a map directory, an unknown extension, unreadable content,
-/// nothing (no points, no scans) in it.
-AccuracyInput loadAccuracyInput(const std::string& path);
+/// nothing (no points, no scans) in it. A map directory is read strictly (openMapForTool): a bad line
+/// of poses.csv or a bad scan file is an IoError naming it, unless skip_bad (then it is skipped and
+/// listed in problems).
+AccuracyInput loadAccuracyInput(const std::string& path, bool skip_bad = false);
 const char* kindName(AccuracyInput::Kind kind);
 
 struct AccuracyConfig {
