@@ -110,6 +110,7 @@ void FusedMapConfig::validate() const {
   requireInRange("splat", splat, 0, 3, "voxels");
   requireInRange("max_weight", max_weight, 1.0, 1e6);
   requireInRange("min_weight", min_weight, 1.0, max_weight);
+  requireInRange("max_grid_mb", max_grid_mb, 1.0, 1e6, "MB");
 }
 
 FusedMap::FusedMap(const FusedMapConfig& config) : config_(config), grids_(new Grids) {
@@ -138,6 +139,10 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
   const float max_w = static_cast<float>(config_.max_weight);
   const Eigen::Vector3d o = origin.cast<double>();
   size_t used = 0, updates = 0;
+  // Both grids get a leaf node at the same place: the bound counts their leaves as they are allocated.
+  using Leaf = openvdb::FloatTree::LeafNodeType;  // the node and its separately allocated voxel buffer
+  const double leaf_bytes = 2.0 * (sizeof(Leaf) + Leaf::SIZE * sizeof(float));
+  const size_t max_leaves = static_cast<size_t>(config_.max_grid_mb * 1048576.0 / leaf_bytes);
   for (const Eigen::Vector3f& pf : points) {
     if (!pf.allFinite()) {
       ++stats_.skipped_points;
@@ -157,6 +162,14 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
     const auto update = [&](const Coord& c, double sdf) {
       const float value = static_cast<float>(std::min(sdf, trunc));  // before the band: free (+trunc)
       const float w = weight.getValue(c);
+      if (w == 0.0f && !weight.probeConstLeaf(c) && ++stats_.leaves_created > max_leaves) {
+        std::ostringstream o;
+        o << "the fused map's grids passed max_grid_mb = " << config_.max_grid_mb << " MB ("
+          << stats_.leaves_created << " leaf nodes of 8^3 voxels) after " << used << " of scan "
+          << stats_.scans + 1 << "'s " << points.size() << " readings: voxel_m = " << config_.voxel_m
+          << " m is too fine for the mapped space; use a larger voxel (default 0.02 m) or raise max_grid_mb";
+        throw ConfigError(o.str());
+      }
       const float D = w > 0.0f ? tsdf.getValue(c) : 0.0f;
       tsdf.setValue(c, (D * w + value) / (w + 1.0f));
       weight.setValue(c, std::min(w + 1.0f, max_w));

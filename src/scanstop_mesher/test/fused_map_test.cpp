@@ -80,6 +80,34 @@ TEST(FusedMap, ConfigAndOriginAreChecked) {
   EXPECT_EQ(m.weightAt(Eigen::Vector3f(0.5f, 0, 0)), 1.0f);
 }
 
+// Issue #22 class 3: a voxel far too fine for the scans (1 mm on a wall 3 m away, whole beams carved)
+// wanted 9 GB and more; with max_grid_mb the integration ends at the bound, naming the voxel.
+TEST(FusedMap, AVoxelTooFineForTheMapEndsAtMaxGridMbNamingIt) {
+  std::mt19937 rng(3);
+  const std::vector<Eigen::Vector3f> wall = scanWall(Eigen::Vector3f::Zero(), 3.0, -1, 1, -1, 1, 0.02, 0.0, rng);
+  FusedMapConfig fine;
+  fine.voxel_m = 0.001;
+  fine.truncation_m = 0.003;
+  fine.max_grid_mb = 20;
+  FusedMap m(fine);
+  try {
+    m.integrate(wall, Eigen::Vector3f::Zero());
+    FAIL() << "integrated " << m.memoryBytes() / 1048576.0 << " MB of grids past max_grid_mb 20";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("max_grid_mb = 20 MB"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("voxel_m = 0.001 m is too fine"), std::string::npos) << e.what();
+  }
+  // It stopped at the bound (the grids' own count adds their internal nodes: 25 MB measured).
+  EXPECT_LT(m.memoryBytes(), 30u * 1048576u);
+  EXPECT_GT(m.memoryBytes(), 19u * 1048576u);
+  // The default voxel holds the same wall within the default bound.
+  FusedMap ok;
+  EXPECT_EQ(ok.integrate(wall, Eigen::Vector3f::Zero()), wall.size());
+  EXPECT_LT(ok.memoryBytes(), FusedMapConfig().max_grid_mb * 1048576.0);
+  fine.max_grid_mb = 0;  // below the allowed range
+  EXPECT_THROW(FusedMap{fine}, ConfigError);
+}
+
 // A spurious reading (here a small dense cluster, as a person walking by) that two later scans see
 // through disappears from the fused surface; without carving it stays (the control).
 TEST(FusedMap, FreeSpaceCarvingRemovesWhatLaterScansSeeThrough) {

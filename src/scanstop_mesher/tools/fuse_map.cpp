@@ -24,7 +24,8 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--splat n] [--min-weight w]\n"
-    "                [--mesh marching_cubes|points|bpa] [--radii r1,r2,...] [--vdb FILE] [--json] [--skip-bad]\n"
+    "                [--max-grid-mb MB] [--mesh marching_cubes|points|bpa] [--radii r1,r2,...] [--vdb FILE] [--json]\n"
+    "                [--skip-bad]\n"
     "  MAP_DIR       a map directory (poses.csv + scans/)\n"
     "  OUTPUT        .stl or .ply for a mesh; .ply, .pcd or .xyz for --mesh points; its directory must exist\n"
     "  --voxel       voxel edge [m], [0.001, 1] (default 0.02)\n"
@@ -35,6 +36,8 @@ constexpr const char* kUsage =
     "  --splat       lateral reach of each reading's band [voxels], [0, 3] (default 0: the crossed voxels;\n"
     "                1: 3 x 3 voxels across the beam, for beams up to 3 voxels apart, less accurate)\n"
     "  --min-weight  readings a voxel needs to count as seen, [1, 10000] (default 2)\n"
+    "  --max-grid-mb refuse (exit 1) once the fused grids would need more memory [MB], [1, 1e6] (default\n"
+    "                500): a voxel too fine for the map ends at once instead of filling the machine's memory\n"
     "  --mesh        marching_cubes (default): volumeToMesh of the field; points: the fused surface points\n"
     "                with normals; bpa: Ball Pivoting of those points\n"
     "  --radii       ball radii for --mesh bpa [m] (default: automatic from the point spacing)\n"
@@ -64,6 +67,7 @@ int main(int argc, char** argv) {
       .real("--carve", config.carve_m, 0.0, 1000.0)
       .integer("--splat", config.splat, 0, 3)
       .real("--min-weight", config.min_weight, 1.0, 10000.0)
+      .real("--max-grid-mb", config.max_grid_mb, 1.0, 1e6)
       .choice("--mesh", mode, {"marching_cubes", "points", "bpa"})
       .custom("--radii", [&](const std::string& v) { bpa_config.radii_m = parseRadii(v); })
       .text("--vdb", vdb)
@@ -156,6 +160,9 @@ int main(int argc, char** argv) {
                 << "written:      " << output << (vdb.empty() ? "" : " and " + vdb) << std::endl;
     }
     return 0;
+  } catch (const ConfigError& e) {  // the voxel bound, found while integrating
+    std::cerr << "fuse_map: " << e.what() << " (--voxel, --max-grid-mb)" << std::endl;
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "fuse_map: " << e.what() << std::endl;
     return 1;
