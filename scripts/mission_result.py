@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """The exit code of a mission launch (roslaunch itself always exits 0): reads RUN_DIR/summary.json
-and exits 0 when the mission ended DONE, 1 when it ended otherwise (FAILED, ABORTED), 2 when there
-is no summary written by this launch (--since: the launch's start, seconds since the epoch; an older
-summary.json is a previous run's). Prints one line saying which.
+and exits 0 when the mission ended DONE, 1 when it ended otherwise (FAILED, ABORTED) after at least
+one scan, 2 for a start-up error: no summary written by this launch (--since: the launch's start,
+seconds since the epoch; an older summary.json is a previous run's), or a mission that ended before
+its first scan (a node that ended the launch at start-up, a driver that never came up). Prints one
+line saying which.
 
   mission_result.py RUN_DIR [--since EPOCH]
 """
@@ -32,6 +34,10 @@ def main():
         return 2
     state = s.get("state", "?")
     why = s.get("last_error") or s.get("complete_reason") or ""
+    if state != "DONE" and not s.get("scans"):
+        print("mission_result: world %s, mission %s before its first scan%s: a start-up error (see the FATAL/ERROR "
+              "lines above)" % (s.get("world", "?"), state, (" (" + why + ")") if why else ""))
+        return 2
     print("mission_result: world %s, mission %s%s" % (s.get("world", "?"), state, (": " + why) if why else ""))
     return 0 if state == "DONE" else 1
 

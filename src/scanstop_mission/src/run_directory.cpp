@@ -35,6 +35,22 @@ int makeDirectories(const std::string& path) {
   return 0;
 }
 
+/// The map's poses.csv has a scan line, or the mission state lists a scan (a state that does not parse
+/// counts as holding scans: the mission repairs it from the map, and nothing is set aside unread).
+bool holdsScans(const std::string& dir) {
+  std::ifstream poses(dir + "/map/poses.csv");
+  std::string line;
+  for (int n = 0; std::getline(poses, line); ++n)
+    if (n > 0 && !line.empty()) return true;
+  if (!exists(dir + "/mission_state.yaml")) return false;
+  try {
+    const YAML::Node root = YAML::LoadFile(dir + "/mission_state.yaml");
+    return !root.IsMap() || !root["scans"] || !root["scans"].IsSequence() || root["scans"].size() > 0;
+  } catch (const std::exception&) {
+    return true;
+  }
+}
+
 std::string kindOf(const struct stat& st) {
   if (S_ISREG(st.st_mode)) return "a regular file";
   if (S_ISLNK(st.st_mode)) return "a symbolic link";
@@ -120,7 +136,16 @@ RunDirectory::RunDirectory(const std::string& path, const RunIdentity& identity)
   if (::access(path_.c_str(), W_OK | X_OK) != 0)
     throw RunDirectoryError(path_, std::string("the run directory is not writable (") + std::strerror(errno) + ")");
 
-  const bool has_mission = exists(path_ + "/mission_state.yaml") || exists(path_ + "/map/poses.csv");
+  bool has_mission = exists(path_ + "/mission_state.yaml") || exists(path_ + "/map/poses.csv");
+  if (has_mission && !holdsScans(path_) && exists(path_ + "/mission_state.yaml")) {
+    // A mission that ended before its first scan (a start-up error: a bad start pose, a missing world)
+    // holds nothing to protect: the corrected launch starts afresh here. Its state is kept aside.
+    set_aside_ = path_ + "/mission_state.yaml.unstarted";
+    if (std::rename((path_ + "/mission_state.yaml").c_str(), set_aside_.c_str()) != 0)
+      throw RunDirectoryError(path_, std::string("cannot set aside mission_state.yaml of a mission that took no scan (") +
+                                         std::strerror(errno) + ")");
+    has_mission = exists(path_ + "/map/poses.csv");
+  }
   RunIdentity recorded;
   bool have_recorded = false;
   if (exists(identityPath())) {

@@ -28,16 +28,22 @@ RunIdentity identityOf(const std::string& world, const std::string& start_pose =
   return id;
 }
 
-/// A run directory after a run of `id`: the identity and a saved mission.
+/// A saved mission of `world` in `dir` holding `scans` scans.
+void saveMission(const std::string& dir, const std::string& world, State state, int scans) {
+  MissionState st;
+  st.world = world;
+  st.state = state;
+  st.scans.resize(scans);
+  st.save(dir + "/mission_state.yaml");
+}
+
+/// A run directory after a run of `id`: the identity and a saved mission with one scan.
 std::string finishedRun(const RunIdentity& id) {
   const std::string dir = tempDir() + "/run";
   RunDirectory created(dir, id);
   EXPECT_TRUE(created.created());
   EXPECT_FALSE(created.resumed());
-  MissionState st;
-  st.world = id.fields.at("world");
-  st.state = State::Done;
-  st.save(dir + "/mission_state.yaml");
+  saveMission(dir, id.fields.at("world"), State::Done, 1);
   return dir;
 }
 
@@ -103,12 +109,33 @@ TEST(RunDirectory, ADirectoryWithoutAMissionTakesTheNewIdentity) {
   EXPECT_EQ(RunIdentity::load(second.identityPath()).fields.at("start_pose"), "1,1,0");
 }
 
+TEST(RunDirectory, AMissionThatEndedBeforeItsFirstScanIsSetAsideNotDefended) {
+  // A launch that ended at start-up (a start pose in a wall) leaves a mission state with no scan; the
+  // corrected launch (another start pose) starts afresh there instead of being refused as another run.
+  const std::string dir = tempDir() + "/run";
+  { RunDirectory first(dir, identityOf("room_10x8", "0,4,0")); }
+  saveMission(dir, "room_10x8", State::Aborted, 0);
+  RunDirectory second(dir, identityOf("room_10x8", "2,5,0"));
+  EXPECT_FALSE(second.resumed());
+  EXPECT_EQ(second.setAside(), dir + "/mission_state.yaml.unstarted");
+  EXPECT_EQ(MissionState::load(second.setAside()).state, State::Aborted);  // kept, not deleted
+  EXPECT_EQ(RunIdentity::load(second.identityPath()).fields.at("start_pose"), "2,5,0");
+  // One scan in the map (even when the state lists none) is a mission: another start pose is refused.
+  const std::string scanned = tempDir() + "/run";
+  { RunDirectory first(scanned, identityOf("room_10x8", "0,4,0")); }
+  saveMission(scanned, "room_10x8", State::Failed, 0);
+  ASSERT_EQ(::mkdir((scanned + "/map").c_str(), 0755), 0);
+  writeFileAtomic(scanned + "/map/poses.csv", "index,file\n0,scans/scan_0000.pcd\n");
+  EXPECT_NE(messageOf(scanned, identityOf("room_10x8", "2,5,0")).find("start_pose is '0,4,0' there"), std::string::npos);
+  // A state that lists a scan is a mission too.
+  const std::string listed = finishedRun(identityOf("room_10x8", "0,4,0"));
+  EXPECT_NE(messageOf(listed, identityOf("room_10x8", "2,5,0")).find("start_pose is '0,4,0' there"), std::string::npos);
+}
+
 TEST(RunDirectory, AnEarlierVersionsDirectoryIsCheckedByItsMissionsWorld) {
   // No run_identity.yaml: mission_state.yaml's world decides.
   const std::string dir = tempDir();
-  MissionState st;
-  st.world = "room_10x8";
-  st.save(dir + "/mission_state.yaml");
+  saveMission(dir, "room_10x8", State::Done, 2);
   EXPECT_NE(messageOf(dir, identityOf("corridor")).find("world is 'room_10x8' there, 'corridor' now"), std::string::npos);
   RunDirectory same(dir, identityOf("room_10x8"));
   EXPECT_TRUE(same.resumed());

@@ -192,7 +192,9 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   reset_srv_ = nh.advertiseService("sim/reset", &SimNode::onReset, this);
   hidden_obstacle_srv_ = nh.advertiseService("sim/add_hidden_obstacle", &SimNode::onAddHiddenObstacle, this);
   clock_timer_ = nh.createWallTimer(ros::WallDuration(0.1), &SimNode::onClockTimer, this);
-  publishState();
+  // Nothing is saved until the simulation changes (a motion, a scan, a reset): a sim_node started on a
+  // run directory that turns out to be another run's (the mission refuses it) leaves no file there.
+  publishState(false);
   publishStaticTransforms();
   publishWorldMarker();
 }
@@ -219,8 +221,8 @@ void SimNode::persistState() {
   }
 }
 
-void SimNode::publishState() {
-  persistState();
+void SimNode::publishState(bool persist) {
+  if (persist) persistState();
   const ros::Time stamp = now();
   if (publish_clock_) {
     rosgraph_msgs::Clock clock;

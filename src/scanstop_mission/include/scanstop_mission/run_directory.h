@@ -49,7 +49,10 @@ class RunDirectory {
   ///  - path exists but is not a directory, or cannot be created/written: RunDirectoryError;
   ///  - path holds no mission yet (no mission_state.yaml, no map/poses.csv): the identity is (re)written;
   ///  - path holds a mission of the same identity: resumed() is true;
-  ///  - path holds a mission of another identity: RunDirectoryError naming the differences.
+  ///  - path holds a mission of another identity: RunDirectoryError naming the differences;
+  ///  - path holds a mission that took no scan (it ended at start-up, e.g. on a bad start pose): its
+  ///    mission_state.yaml is renamed to mission_state.yaml.unstarted (setAside()) and the run starts
+  ///    afresh, so that the corrected launch is not refused as another run.
   /// A directory of an earlier version (a mission but no run_identity.yaml) is checked by the world
   /// its mission_state.yaml names; when it agrees the identity is recorded.
   RunDirectory(const std::string& path, const RunIdentity& identity);
@@ -60,11 +63,14 @@ class RunDirectory {
   bool resumed() const { return resumed_; }
   /// The directory was created by this run.
   bool created() const { return created_; }
+  /// Where the state of a mission that took no scan was moved ("" when none was).
+  const std::string& setAside() const { return set_aside_; }
 
  private:
   std::string path_;
   bool resumed_ = false;
   bool created_ = false;
+  std::string set_aside_;
 };
 
 }  // namespace mission

@@ -52,8 +52,9 @@ class SimNode {
   void onClockTimer(const ros::WallTimerEvent&);
   /// Writes the simulation state to state_file_ (atomically; errors are logged, not fatal).
   void persistState();
-  /// Publishes /clock, odom, tf and ground truth for the current state (and persists it).
-  void publishState();
+  /// Publishes /clock, odom, tf and ground truth for the current state; with `persist`, saves the
+  /// state to state_file first.
+  void publishState(bool persist = true);
   void publishStaticTransforms();
   void publishWorldMarker();
   /// A new /tf subscriber (rviz started later, a late node) gets the recent odom -> base_link
