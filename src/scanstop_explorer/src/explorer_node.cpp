@@ -1,5 +1,6 @@
 // explorer_node: see scanstop_explorer/explorer_ros.h.
 #include "scanstop_common/error.h"
+#include "scanstop_common/ros/launch_control.h"
 #include "scanstop_common/ros/master_watchdog.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_explorer/explorer_ros.h"
@@ -19,6 +20,9 @@ int main(int argc, char** argv) {
     if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {
     ROS_FATAL("explorer_node: %s", e.what());
+    // A start-up error (a map_dir that is a file, a bad parameter) repeats on every respawn: with
+    // ~end_launch_on_setup_error the launch ends instead (issue 22).
+    scanstop::endLaunchOnSetupError(pnh, "explorer_node");
     return 1;
   }
   return 0;

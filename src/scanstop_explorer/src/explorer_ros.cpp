@@ -39,6 +39,8 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   optional(pnh, "frame_id", n.frame_id);
   double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
   optional(pnh, "master_timeout", master_timeout);
+  bool end_launch = false;  // read by main() after a start-up error; a known name here
+  optional(pnh, "end_launch_on_setup_error", end_launch);
   optional(pnh, "map_dir", n.map_dir);
   optional(pnh, "run_dir", n.run_dir);
   optional(pnh, "image_scale", n.image_scale);

@@ -18,6 +18,24 @@
 
 namespace scanstop {
 namespace mesher {
+namespace {
+
+/// Throws IoError unless map_dir holds a map (a directory with a poses.csv), saying what to give instead.
+void requireMapDirectory(const std::string& map_dir) {
+  struct stat st;
+  std::string problem;
+  if (::stat(map_dir.c_str(), &st) != 0)
+    problem = "does not exist";
+  else if (!S_ISDIR(st.st_mode))
+    problem = "is not a directory";
+  else if (::stat((map_dir + "/poses.csv").c_str(), &st) != 0)
+    problem = "holds no map (no poses.csv)";
+  if (!problem.empty())
+    throw IoError(map_dir, problem + "; require_map is set (viewing a run): give view_run.launch the run_dir of a " +
+                               "finished run, e.g. run_dir:=$HOME/scanstop_runs/<world>");
+}
+
+}  // namespace
 
 void MesherNodeConfig::validate() const {
   if (frame_id.empty()) throw ConfigError("parameter 'frame_id' is empty");
@@ -34,6 +52,7 @@ void MesherNodeConfig::validate() const {
   requireInRange("fused_voxel_m", fused_voxel_m, 0.005, 0.5, "m");
   requireInRange("fused_carve_m", fused_carve_m, 0.0, 1000.0, "m");
   if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
+  if (require_map && map_dir.empty()) throw ConfigError("parameter 'require_map' is true but 'map_dir' is empty");
   if (!default_output.empty()) {
     const std::string ext = fileExtension(default_output);
     if (ext != "stl" && ext != "ply")
@@ -70,12 +89,14 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "max_display_triangles", c.max_display_triangles);
   ros_params::optional(pnh, "load_mesh", c.load_mesh);
   ros_params::optional(pnh, "publish_map", c.publish_map);
+  ros_params::optional(pnh, "require_map", c.require_map);
   ros_params::optional(pnh, "map_cloud_voxel_m", c.map_cloud_voxel_m);
   ros_params::optional(pnh, "map_poll_s", c.map_poll_s);
   ros_params::optional(pnh, "mesh_method", c.mesh_method);
   ros_params::optional(pnh, "fused_voxel_m", c.fused_voxel_m);
   ros_params::optional(pnh, "fused_carve_m", c.fused_carve_m);
   c.validate();
+  if (c.require_map) requireMapDirectory(c.map_dir);
   coloring_ = parseColoring(c.color_mode, "color_mode");
 
   // Relative names: meant to be remapped / pushed into a namespace.

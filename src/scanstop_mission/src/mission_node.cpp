@@ -21,6 +21,7 @@
 #include "scanstop_eval/surface_coverage.h"
 #include "scanstop_explorer/explorer_ros.h"
 #include "scanstop_explorer/ground_truth.h"
+#include "scanstop_common/ros/launch_control.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_common/ros/robot_body.h"
@@ -232,6 +233,9 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   ROS_INFO("mission: run directory %s (%s; identity in %s)", run_directory.path().c_str(),
            run_directory.created() ? "new" : run_directory.resumed() ? "resuming its mission" : "no mission in it yet",
            run_directory.identityPath().c_str());
+  if (!run_directory.setAside().empty())
+    ROS_WARN("mission: the run directory held a mission that ended before its first scan: starting afresh (its "
+             "state kept as %s)", run_directory.setAside().c_str());
 
   robot_ = std::make_unique<RosRobotSystem>(nh_, timeouts, map_dir);
   mission_ = std::make_unique<Mission>(
@@ -337,15 +341,6 @@ void MissionNode::surfaceCoverage(const TriangleMesh& world, const Pose2D& start
   }
 }
 
-namespace {
-/// Whether this process was started by roslaunch (its parent's command line names it).
-bool parentIsRoslaunch() {
-  std::ifstream in("/proc/" + std::to_string(::getppid()) + "/cmdline", std::ios::binary);
-  const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return cmdline.find("roslaunch") != std::string::npos;
-}
-}  // namespace
-
 void MissionNode::runMission() {
   const State end = mission_->run();
   const MissionState state = mission_->snapshot();
@@ -392,7 +387,7 @@ void MissionNode::runMission() {
     // reports the required process.
     if (end == State::Done && parentIsRoslaunch()) {
       ROS_INFO("mission: done; ending the launch");
-      if (::kill(::getppid(), SIGINT) == 0) return;
+      if (interruptParentLaunch()) return;
     }
     ros::shutdown();
   }

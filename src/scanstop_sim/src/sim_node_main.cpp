@@ -1,23 +1,11 @@
 #include <ros/ros.h>
-#include <signal.h>
-#include <unistd.h>
 
-#include <fstream>
-#include <iterator>
 #include <string>
 
+#include "scanstop_common/ros/launch_control.h"
 #include "scanstop_common/ros/master_watchdog.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_sim/sim_node.h"
-
-namespace {
-/// Whether this process was started by roslaunch (its parent's command line names it).
-bool parentIsRoslaunch() {
-  std::ifstream in("/proc/" + std::to_string(::getppid()) + "/cmdline", std::ios::binary);
-  const std::string cmdline((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return cmdline.find("roslaunch") != std::string::npos;
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   scanstop::sim::keepLargeBuffersMapped();
@@ -46,15 +34,7 @@ int main(int argc, char** argv) {
     // A start-up error (world file, start pose, parameters) repeats on every respawn: with
     // ~end_launch_on_setup_error (sim_explore.launch sets it) the launch ends here, at once, instead
     // of respawning sim_node while the mission waits for its services (issue 22).
-    bool end_launch = false;
-    pnh.param("end_launch_on_setup_error", end_launch, false);
-    if (end_launch && parentIsRoslaunch()) {
-      ROS_FATAL("sim_node: ending the launch: every restart would fail the same way");
-      // roslaunch interrupted while it still starts the other nodes hangs ~20 s in its shutdown
-      // (measured): give it time to finish starting them (this process being alive, no respawn).
-      ::sleep(3);
-      ::kill(::getppid(), SIGINT);
-    }
+    scanstop::endLaunchOnSetupError(pnh, "sim_node");
     return 1;
   }
   return 0;

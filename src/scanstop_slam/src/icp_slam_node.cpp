@@ -18,6 +18,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/ros/msg_conversion.h"
+#include "scanstop_common/ros/launch_control.h"
 #include "scanstop_common/ros/master_watchdog.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_slam/icp_slam.h"
@@ -37,6 +38,8 @@ class IcpSlamNode {
     };
     double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
     optional("master_timeout", master_timeout);
+    bool end_launch = false;  // read by main() after a start-up error; a known name here
+    optional("end_launch_on_setup_error", end_launch);
     std::string mode = "3dof";
     optional("mode", mode);
     requireMode(pnh, mode);
@@ -375,6 +378,9 @@ int main(int argc, char** argv) {
     if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {
     ROS_FATAL("icp_slam_node: %s", e.what());
+    // A start-up error (a map_dir that is a file, a bad parameter) repeats on every respawn: with
+    // ~end_launch_on_setup_error the launch ends instead (issue 22).
+    scanstop::endLaunchOnSetupError(pnh, "icp_slam_node");
     return 1;
   }
   return 0;

@@ -36,6 +36,9 @@ struct MesherNodeConfig {
   int max_display_triangles = 2000000; ///< larger meshes are shown by every k-th triangle (files keep all)
   std::string load_mesh;               ///< mesh (.stl/.ply) to show ("" = none); reloaded when it changes
   bool publish_map = false;            ///< publish map_dir's points, path, scan poses and base_link (viewing)
+  /// map_dir must hold a map (its poses.csv) when the node starts: viewing a finished run, where an
+  /// empty view of a directory that holds no run would only puzzle the user (view_run.launch)
+  bool require_map = false;
   double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)
   double map_poll_s = 2.0;             ///< period [s] of checking map_dir and load_mesh for changes
   /// How build_mesh meshes the map (an empty input_path): "bpa" (Ball Pivoting of the map's points),
