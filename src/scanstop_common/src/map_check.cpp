@@ -2,6 +2,8 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
+
 #include "scanstop_common/error.h"
 
 namespace scanstop {
@@ -29,13 +31,17 @@ MapDirectory openMapForTool(const std::string& dir, bool skip_bad, const std::fu
   MapDirectory map(root);
   const auto& problems = map.problems();
   if (!problems.empty() && !skip_bad) {
+    // A read-only tool does not repair: the first problem is named (also a line the scan ledger
+    // poses_journal.csv holds: icp_slam_node repairs poses.csv when it next starts; --skip-bad loads it
+    // from there).
     const MapProblem& first = problems.front();
+    const bool ledger = std::any_of(problems.begin(), problems.end(), [](const MapProblem& p) { return p.repaired; });
     throw IoError(first.path, withoutSkipNote(first.problem) + " (" + std::to_string(problems.size()) +
-                                  (problems.size() == 1 ? " problem" : " problems") +
-                                  " in the map; --skip-bad loads the rest)");
+                                  (problems.size() == 1 ? " problem" : " problems") + " in the map; --skip-bad loads the rest" +
+                                  (ledger ? ", with the lines poses_journal.csv restores" : "") + ")");
   }
   for (const MapProblem& p : problems)
-    if (warn) warn("skipped: " + p.message());
+    if (warn) warn((p.repaired ? "repaired: " : "skipped: ") + p.message());
   if (map.size() == 0) throw IoError(map.posesPath(), "the map directory holds no loadable scans");
   return map;
 }

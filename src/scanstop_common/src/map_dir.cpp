@@ -207,6 +207,7 @@ void MapDirectory::load() {
   std::vector<MapScanInfo> all;     // parsed lines, first of each index
   std::vector<size_t> first_line;  // their line numbers
   std::vector<std::string> mentioned;  // file column of skipped lines
+  std::vector<std::pair<size_t, uint32_t>> bad_lines;  // (problem, index) of lines that did not parse
   struct stat st;
   const bool exists = ::stat(poses.c_str(), &st) == 0 || errno != ENOENT;
   if (exists && !S_ISREG(st.st_mode)) throw IoError(poses, "not a regular file");
@@ -226,7 +227,10 @@ void MapDirectory::load() {
       info = parseLine(line);
     } catch (const std::invalid_argument& e) {
       uint32_t index = 0;
-      if (leadingIndex(line, index)) note(index);
+      if (leadingIndex(line, index)) {
+        note(index);
+        bad_lines.emplace_back(problems_.size(), index);
+      }
       const std::vector<std::string> columns = splitCsv(line);
       if (columns.size() > 1) mentioned.push_back(columns[1]);
       problems_.push_back({poses, where + (line_no == 1 ? "not the scanstop poses header" : e.what()) + "; line skipped"});
@@ -251,6 +255,8 @@ void MapDirectory::load() {
     first_line.push_back(line_no);
   }
   restoreFromJournal(all, largest);
+  for (const auto& [problem, index] : bad_lines)
+    if (std::find(restored_.begin(), restored_.end(), index) != restored_.end()) problems_[problem].repaired = true;
   std::stable_sort(all.begin(), all.end(), [](const MapScanInfo& a, const MapScanInfo& b) { return a.index < b.index; });
   for (const MapScanInfo& info : all) {
     const std::string path = dir_ + "/" + info.file;
@@ -350,7 +356,7 @@ void MapDirectory::restoreFromJournal(std::vector<MapScanInfo>& all, long& large
                                         " belongs to scan " + std::to_string(owner->index) + " in poses.csv; not restored"});
       continue;
     }
-    problems_.push_back({poses, where + "restored from poses_journal.csv line " + std::to_string(entry.second)});
+    problems_.push_back({poses, where + "restored from poses_journal.csv line " + std::to_string(entry.second), true});
     all.push_back(info);
     restored_.push_back(info.index);
     largest = std::max<long>(largest, info.index);

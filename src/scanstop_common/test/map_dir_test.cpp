@@ -625,6 +625,32 @@ TEST(OpenMapForTool, ANaNPoseIsAnErrorNamingTheLine) {
   EXPECT_NE(warnings[0].find("line 3: column 4 ('nan') is not a finite number; line skipped"), std::string::npos);
 }
 
+// Issue #22 class 8 seen from a tool: poses.csv lost its last line (cut mid-line), the scan ledger has
+// it. A read-only tool names the line and says the ledger holds it; --skip-bad loads every scan (the
+// restored one too) and says what was repaired.
+TEST(OpenMapForTool, ALineTheJournalRestoresIsNamedAndLoadedWithSkipBad) {
+  TempDir tmp;
+  const std::string dir = makeMap(tmp, 3);
+  const std::string text = readFile(dir + "/poses.csv");
+  writeFileAtomic(dir + "/poses.csv", text.substr(0, text.find("\n2,") + 8));  // "2,scans/" left
+  expectIoError([&] { openMapForTool(dir, false, nullptr); }, dir + "/poses.csv: line 4: expected 17",
+                "--skip-bad loads the rest, with the lines poses_journal.csv restores");
+  std::vector<std::string> warnings;
+  const MapDirectory map = openMapForTool(dir, true, [&](const std::string& w) { warnings.push_back(w); });
+  EXPECT_EQ(map.size(), 3u);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0].rfind("repaired: " + dir + "/poses.csv: line 4: ", 0), 0u) << warnings[0];
+  EXPECT_NE(warnings[1].find("scan 2 has no valid line in poses.csv; restored from poses_journal.csv"), std::string::npos)
+      << warnings[1];
+  // Without the ledger the line is skipped, not repaired (and scan 2's file is one no line names).
+  dropJournal(dir);
+  warnings.clear();
+  EXPECT_EQ(openMapForTool(dir, true, [&](const std::string& w) { warnings.push_back(w); }).size(), 2u);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0].rfind("skipped: " + dir + "/poses.csv: line 4: ", 0), 0u) << warnings[0];
+  EXPECT_EQ(warnings[1], "skipped: " + dir + "/scans/scan_0002.pcd: not listed in poses.csv (an interrupted append?); not loaded");
+}
+
 TEST(OpenMapForTool, CreatesNothingAndNamesAMissingOrForeignDirectory) {
   TempDir tmp;
   // `icp_replay --help` created --help/scans before: a tool never creates the map it reads.

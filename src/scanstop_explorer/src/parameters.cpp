@@ -7,6 +7,7 @@
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/file_util.h"
 
 namespace scanstop {
 namespace explorer {
@@ -46,6 +47,9 @@ void readValue(const YAML::Node& node, const std::string& where, T& value) {
 }  // namespace
 
 void readParameterFile(const std::string& path, ExplorerConfig& c) {
+  // missing, a directory, unreadable: said as such (YAML::BadFile only says "bad file")
+  const std::string problem = inputFileProblem(path);
+  if (!problem.empty()) throw IoError(path, problem + " (the parameter file)");
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);

@@ -149,7 +149,7 @@ TEST(PlanStep, ConfigFileSetsTheExplorersParameters) {
   EXPECT_NE(bad.out.find("bad.yaml: unknown explorer parameter 'k_r'"), std::string::npos) << bad.out;
   const ToolRun missing = run(exe + " --config " + dir + "/none.yaml");
   EXPECT_EQ(missing.status, 2) << missing.out;
-  EXPECT_NE(missing.out.find("none.yaml: cannot read the parameter file"), std::string::npos) << missing.out;
+  EXPECT_NE(missing.out.find("none.yaml: no such file (the parameter file)"), std::string::npos) << missing.out;
   std::system(("rm -rf " + dir).c_str());
 }
 

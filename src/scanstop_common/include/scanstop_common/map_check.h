@@ -15,8 +15,10 @@ namespace scanstop {
 /// skip_bad, any problem of the map (problems()) is an IoError naming its file and what was wrong
 /// ("<dir>/poses.csv: line 3: ...", "<dir>/scans/scan_0002.pcd: no such file; scan 2 skipped"), with
 /// how many problems there are and that --skip-bad loads the rest. With skip_bad each problem goes
-/// to `warn` (prefixed "skipped: ") and the good scans are kept. A map without any loadable scan is
-/// an IoError either way.
+/// to `warn` (prefixed "skipped: ") and the good scans are kept; a bad line of poses.csv whose scan
+/// the scan ledger (poses_journal.csv) restored is prefixed "repaired: " (that scan is loaded), and
+/// the refusal without skip_bad says that the ledger holds such lines. A map without any loadable
+/// scan is an IoError either way.
 MapDirectory openMapForTool(const std::string& dir, bool skip_bad, const std::function<void(const std::string&)>& warn);
 
 }  // namespace scanstop

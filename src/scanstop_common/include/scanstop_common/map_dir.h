@@ -42,6 +42,9 @@ struct MapScanInfo {
 struct MapProblem {
   std::string path;     ///< the bad file (poses.csv or a scan file), absolute when the directory is
   std::string problem;  ///< what was wrong and what the loader did, e.g. "line 4: ...; line skipped"
+  /// Nothing was lost: the scan of this bad poses.csv line came back from poses_journal.csv (and the
+  /// note of that restoration itself).
+  bool repaired = false;
   std::string message() const { return path + ": " + problem; }
 };
 
