@@ -7,19 +7,6 @@
 #include "scanstop_common/error.h"
 
 namespace scanstop {
-namespace {
-
-/// The loader's "; line skipped" / "; scan N skipped" / "; not loaded": not what a strict tool does.
-std::string withoutSkipNote(const std::string& problem) {
-  const size_t semi = problem.rfind("; ");
-  if (semi == std::string::npos) return problem;
-  const std::string tail = problem.substr(semi + 2);
-  const bool note = (tail.size() >= 7 && tail.compare(tail.size() - 7, 7, "skipped") == 0) || tail == "not loaded" ||
-                    tail == "no scans loaded";
-  return note ? problem.substr(0, semi) : problem;
-}
-
-}  // namespace
 
 MapDirectory openMapForTool(const std::string& dir, bool skip_bad, const std::function<void(const std::string&)>& warn) {
   struct stat st;
@@ -36,7 +23,7 @@ MapDirectory openMapForTool(const std::string& dir, bool skip_bad, const std::fu
     // from there).
     const MapProblem& first = problems.front();
     const bool ledger = std::any_of(problems.begin(), problems.end(), [](const MapProblem& p) { return p.repaired; });
-    throw IoError(first.path, withoutSkipNote(first.problem) + " (" + std::to_string(problems.size()) +
+    throw IoError(first.path, first.withoutSkipNote() + " (" + std::to_string(problems.size()) +
                                   (problems.size() == 1 ? " problem" : " problems") + " in the map; --skip-bad loads the rest" +
                                   (ledger ? ", with the lines poses_journal.csv restores" : "") + ")");
   }

@@ -192,6 +192,15 @@ void appendFileSynced(const std::string& path, std::string data) {
 
 }  // namespace
 
+std::string MapProblem::withoutSkipNote() const {
+  const size_t semi = problem.rfind("; ");
+  if (semi == std::string::npos) return problem;
+  const std::string tail = problem.substr(semi + 2);
+  const bool note = (tail.size() >= 7 && tail.compare(tail.size() - 7, 7, "skipped") == 0) || tail == "not loaded" ||
+                    tail == "no scans loaded";
+  return note ? problem.substr(0, semi) : problem;
+}
+
 MapDirectory::MapDirectory(const std::string& dir) : dir_(dir) {
   while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
   if (dir_.empty()) throw IoError(dir, "empty map directory name");

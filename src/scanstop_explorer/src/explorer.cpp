@@ -104,7 +104,7 @@ size_t Explorer::loadMapDirectory(const MapDirectory& dir, std::vector<std::stri
     try {
       cloud = dir.loadScanInMap(i);
     } catch (const std::exception& e) {
-      if (problems) problems->push_back("scan " + std::to_string(info.index) + " skipped: " + e.what());
+      if (problems) problems->push_back("scan " + std::to_string(info.index) + " not loaded: " + e.what());
       continue;
     }
     added += addScan(info.index, info.map_pose, cloud.points) ? 1 : 0;

@@ -40,7 +40,7 @@ std::unique_ptr<const MapDirectory> openMapDirectory(const std::string& dir, std
     throw IoError(dir + "/poses.csv", "does not exist (no scan in the map yet)");
   auto map = std::make_unique<const MapDirectory>(dir);
   for (const MapProblem& p : map->problems()) {
-    if (!skipped) throw IoError(dir, p.message());
+    if (!skipped) throw IoError(p.path, p.withoutSkipNote());
     skipped->push_back(p.message());
   }
   if (map->size() == 0) throw IoError(map->posesPath(), "the map has no scans");

@@ -46,6 +46,9 @@ struct MapProblem {
   /// note of that restoration itself).
   bool repaired = false;
   std::string message() const { return path + ": " + problem; }
+  /// The problem without the loader's note of what it did ("; line skipped", "; scan 2 skipped",
+  /// "; not loaded"): what a reader that refuses the map says.
+  std::string withoutSkipNote() const;
 };
 
 /// Reads and appends to a map directory. Files are written atomically (temporary file, fsync, rename).
