@@ -84,6 +84,17 @@ echo "test: catkin_make run_tests (log in logs/run_tests.log)"
 catkin_make -DCATKIN_ENABLE_TESTING=ON -j1 run_tests > logs/run_tests.log 2>&1
 run_rc=$?
 junit run_tests_completed $([[ $run_rc -eq 0 ]] && echo 1 || echo 0) logs/run_tests.log
+
+# The hostile new user (issue #22): bad inputs and faults of every class against the built tools and
+# launches, each refused by name with the right exit code within 10 s and 1 GB, nothing lost
+# (scripts/check_hostile.py; one JUnit case per bad input, the table in logs/hostile_user.md).
+echo "test: the hostile user's bad inputs (scripts/check_hostile.py, log in logs/hostile_user.log)"
+/usr/bin/python3 scripts/check_hostile.py "$results/_hostile" > logs/hostile_user.log 2>&1
+hostile_rc=$?
+cp "$results/_hostile/hostile_user.md" logs/ 2>/dev/null || true
+tail -1 logs/hostile_user.log
+grep -q "^hostile user:" logs/hostile_user.log || junit hostile_user_completed 0 logs/hostile_user.log
+[[ $hostile_rc -eq 0 ]] || grep "^FAIL" logs/hostile_user.log | head -20
 t_test=$(date +%s)
 
 # Optional (SCANSTOP_SANITIZE=1): every package's unit gtests again under ASan + UBSan + LSan
