@@ -96,8 +96,10 @@ class MesherBadInput(unittest.TestCase):
         open(nan_only, 'w').write('nan nan nan\n' * 10)
         garbage = os.path.join(run, 'garbage.xyz')
         open(garbage, 'w').write('1 2 three\n')
-        absurd = os.path.join(run, 'absurd.xyz')
-        write_xyz(absurd, sphere_points() + [(0.0, 3.0e7, 0.0)])
+        absurd = os.path.join(run, 'absurd.xyz')  # beyond the node's max_coordinate_m (10 km)
+        write_xyz(absurd, sphere_points() + [(0.0, 3.0e4, 0.0)])
+        far = os.path.join(run, 'far.xyz')  # beyond what any reader accepts (100 km)
+        write_xyz(far, sphere_points() + [(0.0, 3.0e7, 0.0)])
         before = listing(run)
         nan = float('nan')
 
@@ -129,6 +131,7 @@ class MesherBadInput(unittest.TestCase):
             ('all-NaN input', req(input_path=nan_only), 'no finite points'),
             ('corrupt input', req(input_path=garbage), 'garbage.xyz'),
             ('absurd coordinates', req(input_path=absurd), 'absurd coordinates'),
+            ('a point at 3e7 m', req(input_path=far), 'far.xyz: point 3000 (0, 3e+07, 0) lies beyond the 100000 m coordinate limit'),
             ('no map yet (empty input_path)', req(input_path=''), 'poses.csv'),
         ]
         for what, request, text in bad:

@@ -57,7 +57,8 @@ class RunDir(unittest.TestCase):
         print("%.1f s -> %s" % (time.time() - t0, fatal[-1]))
 
     def room_run(self):
-        """A finished room_10x8 run: its identity as mission_node records it, and its mission."""
+        """A finished room_10x8 run: its identity as mission_node records it, and its mission (one scan: a
+        mission that took none is set aside by a later launch, not defended)."""
         run = os.path.join(self.tmp, "room")
         self.start(["_run_dir:=" + run, "_world:=room_10x8", "_world_file:=" + ROOM])
         deadline = time.time() + 15
@@ -68,7 +69,7 @@ class RunDir(unittest.TestCase):
         self.assertTrue(os.path.exists(os.path.join(run, "run_identity.yaml")), "no run_identity.yaml in %s" % run)
         with open(os.path.join(run, "mission_state.yaml"), "w") as f:
             f.write("state: DONE\nworld: room_10x8\nlast_map_pose: [0, 0, 0]\nodom_at_last_scan: [0, 0, 0]\n"
-                    "odom_now: [0, 0, 0]\nscans: []\n")
+                    "odom_now: [0, 0, 0]\nscans:\n  - index: 0\n    map_pose: [0, 0, 0]\n    odom_pose: [0, 0, 0]\n")
         return run
 
     def test_a_room_run_dir_is_refused_for_the_corridor(self):
