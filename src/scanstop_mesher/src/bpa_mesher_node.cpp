@@ -48,6 +48,7 @@ void MesherNodeConfig::validate() const {
   requireInRange("max_display_triangles", max_display_triangles, 1, 100000000);
   requireNonNegative("map_cloud_voxel_m", map_cloud_voxel_m, "m");
   requirePositive("map_poll_s", map_poll_s, "s");
+  requireInRange("display_max_z_m", display_max_z_m, 0.1, 1000.0, "m");
   requireOneOf("mesh_method", mesh_method, {"bpa", "marching_cubes", "fused_bpa"});
   requireInRange("fused_voxel_m", fused_voxel_m, 0.005, 0.5, "m");
   requireInRange("fused_carve_m", fused_carve_m, 0.0, 1000.0, "m");
@@ -91,6 +92,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::optional(pnh, "publish_map", c.publish_map);
   ros_params::optional(pnh, "require_map", c.require_map);
   ros_params::optional(pnh, "map_cloud_voxel_m", c.map_cloud_voxel_m);
+  ros_params::optional(pnh, "display_max_z_m", c.display_max_z_m);
   ros_params::optional(pnh, "map_poll_s", c.map_poll_s);
   ros_params::optional(pnh, "mesh_method", c.mesh_method);
   ros_params::optional(pnh, "fused_voxel_m", c.fused_voxel_m);
@@ -198,20 +200,26 @@ void BpaMesherNode::buildAndPublish(const scanstop_msgs::BuildMesh::Request& req
   const std::string problem = pointsProblem(points, config_.max_coordinate_m);
   if (!problem.empty()) throw std::invalid_argument("bad input " + source + ": " + problem);
   const MesherResult r = buildMesh(points, mc);
-  writeMesh(output, r.mesh);
-  publishMesh(r.mesh, output);
-  res.success = true;
-  res.points = static_cast<uint32_t>(r.points);
-  res.triangles = static_cast<uint32_t>(r.mesh.faces.size());
-  res.file = output;
   std::ostringstream msg;
   msg << r.mesh.faces.size() << " triangles from " << r.points << " of " << r.input_points << " points of " << source
       << " (radii";
   for (double x : r.radii_m) msg << " " << x;
   msg << " m; " << r.topology.nonmanifold_edges << " non-manifold edges, " << r.topology.nonmanifold_vertices
       << " non-manifold vertices)";
-  for (const std::string& s : skipped) msg << "; " << s;
-  res.message = msg.str();
+  finishMesh(r.mesh, output, r.points, msg.str(), skipped, res);
+}
+
+void BpaMesherNode::finishMesh(const TriangleMesh& mesh, const std::string& output, size_t points,
+                               const std::string& message, const std::vector<std::string>& skipped,
+                               scanstop_msgs::BuildMesh::Response& res) {
+  writeMesh(output, mesh);
+  publishMesh(mesh, output);
+  res.success = true;
+  res.points = static_cast<uint32_t>(points);
+  res.triangles = static_cast<uint32_t>(mesh.faces.size());
+  res.file = output;
+  res.message = message;
+  for (const std::string& s : skipped) res.message += "; " + s;
   ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
 }
 
@@ -224,19 +232,11 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   std::vector<std::string> skipped;
   const FusedMesh r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped);
   for (const std::string& s : skipped) ROS_ERROR("bpa_mesher_node: %s", s.c_str());
-  writeMesh(output, r.mesh);
-  publishMesh(r.mesh, output);
-  res.success = true;
-  res.points = static_cast<uint32_t>(r.surface_points);
-  res.triangles = static_cast<uint32_t>(r.mesh.faces.size());
-  res.file = output;
   std::ostringstream msg;
   msg << r.mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << r.scans
       << " scans of map " << config_.map_dir << " (voxel " << fc.voxel_m << " m, " << r.voxels << " voxels, "
       << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s)";
-  for (const std::string& s : skipped) msg << "; " << s;
-  res.message = msg.str();
-  ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
+  finishMesh(r.mesh, output, r.surface_points, msg.str(), skipped, res);
 }
 
 void BpaMesherNode::publishMesh(const TriangleMesh& mesh, const std::string& file) {
@@ -251,7 +251,7 @@ void BpaMesherNode::publishMesh(const TriangleMesh& mesh, const std::string& fil
 visualization_msgs::MarkerArray BpaMesherNode::markers(const TriangleMesh& mesh) const {
   return meshToMarkers(mesh, config_.frame_id, ros::Time::now(), coloring_,
                        static_cast<size_t>(config_.max_triangles_per_marker),
-                       static_cast<size_t>(config_.max_display_triangles));
+                       static_cast<size_t>(config_.max_display_triangles), static_cast<float>(config_.display_max_z_m));
 }
 
 void BpaMesherNode::onMapTimer(const ros::WallTimerEvent&) {
@@ -279,7 +279,8 @@ void BpaMesherNode::publishMapView() {
   const ros::Time stamp = ros::Time::now();
   const ScanPoints points = voxelDownsample(loadMapDirectory(config_.map_dir), config_.map_cloud_voxel_m);
   PointCloud cloud;
-  cloud.points = points.points;
+  for (const Eigen::Vector3f& p : points.points)
+    if (p.z() <= config_.display_max_z_m) cloud.points.push_back(p);  // the ceiling cut away for the view
   cloud.setUnorganized();
   cloud_pub_.publish(ros_conv::toMsg(cloud, config_.frame_id, stamp));
   nav_msgs::Path path;

@@ -29,7 +29,7 @@ MeshColoring parseColoring(const std::string& value, const std::string& paramete
 
 visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const std::string& frame_id,
                                               const ros::Time& stamp, MeshColoring coloring, size_t max_triangles,
-                                              size_t max_total) {
+                                              size_t max_total, float max_z) {
   visualization_msgs::MarkerArray out;
   visualization_msgs::Marker clear;
   clear.header.frame_id = frame_id;
@@ -37,14 +37,22 @@ visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const st
   clear.ns = "mesh";
   clear.action = visualization_msgs::Marker::DELETEALL;
   out.markers.push_back(clear);
-  if (mesh.faces.empty()) return out;
   max_triangles = std::max<size_t>(1, max_triangles);
+  std::vector<size_t> below;  // faces with every vertex at or below max_z
+  below.reserve(mesh.faces.size());
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& t = mesh.faces[f];
+    if (mesh.vertices[t[0]].z() <= max_z && mesh.vertices[t[1]].z() <= max_z && mesh.vertices[t[2]].z() <= max_z)
+      below.push_back(f);
+  }
+  if (below.empty()) return out;
 
   float z_lo = 0.0f, z_hi = 1.0f;
   if (coloring == MeshColoring::kHeight) {
     std::vector<float> z;
     z.reserve(mesh.vertices.size());
-    for (const auto& v : mesh.vertices) z.push_back(v.z());
+    for (const auto& v : mesh.vertices)
+      if (v.z() <= max_z) z.push_back(v.z());
     const size_t lo = z.size() / 50, hi = z.size() - 1 - z.size() / 50;
     std::nth_element(z.begin(), z.begin() + lo, z.end());
     z_lo = z[lo];
@@ -76,10 +84,10 @@ visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const st
       }
     }
   }
-  const size_t stride = max_total > 0 ? (mesh.faces.size() + max_total - 1) / max_total : 1;
+  const size_t stride = max_total > 0 ? (below.size() + max_total - 1) / max_total : 1;
   std::vector<size_t> shown;
-  shown.reserve(mesh.faces.size() / stride + 1);
-  for (size_t f = 0; f < mesh.faces.size(); f += stride) shown.push_back(f);
+  shown.reserve(below.size() / stride + 1);
+  for (size_t i = 0; i < below.size(); i += stride) shown.push_back(below[i]);
   for (size_t first = 0, id = 0; first < shown.size(); first += max_triangles, ++id) {
     const size_t last = std::min(shown.size(), first + max_triangles);
     visualization_msgs::Marker m;

@@ -61,3 +61,16 @@ TEST(MeshMarkers, NormalColouringAndBadMode) {
   EXPECT_THROW(parseColoring("rainbow", "color_mode"), ConfigError);
   EXPECT_EQ(parseColoring("normal", "color_mode"), MeshColoring::kNormal);
 }
+
+// #21 point 3 / #20: view_run.launch opened rviz on a closed box (the ceiling hid the room). Triangles
+// reaching above max_z are not shown; the height colours span what is shown.
+TEST(MeshMarkers, TrianglesAboveTheDisplayHeightAreLeftOut) {
+  const TriangleMesh m = strip(25);  // vertex i at z = 0.05 i
+  const auto arr = meshToMarkers(m, "map", ros::Time(1.0), MeshColoring::kHeight, 100, 0, 0.5f);
+  ASSERT_EQ(arr.markers.size(), 2u);
+  EXPECT_EQ(arr.markers[1].points.size(), 3u * 9u);  // faces 0..8 (vertices 0..10, z <= 0.5)
+  for (const auto& p : arr.markers[1].points) EXPECT_LE(p.z, 0.5 + 1e-6);
+  EXPECT_GT(arr.markers[1].colors.back().r, 0.9f);  // the highest shown vertex is red
+  // Everything above: only the DELETEALL.
+  EXPECT_EQ(meshToMarkers(m, "map", ros::Time(1.0), MeshColoring::kHeight, 100, 0, -1.0f).markers.size(), 1u);
+}

@@ -122,6 +122,7 @@ class IcpSlamNode {
     optional("relax_loss_scale", config.graph.loss_scale);
     optional("max_cloud_points", max_cloud_points_);
     optional("map_cloud_voxel", map_cloud_voxel_m_);
+    optional("map_cloud_max_z", map_cloud_max_z_m_);
     optional("sensor_height", sensor_height_m_);
     optional("map_frame", map_frame_);
     optional("odom_frame", odom_frame_);
@@ -136,6 +137,7 @@ class IcpSlamNode {
       config.validate();
       requireInRange("max_cloud_points", max_cloud_points_, 1, 1e8);
       requireInRange("map_cloud_voxel", map_cloud_voxel_m_, 0.0, 10.0, "m");
+      requireInRange("map_cloud_max_z", map_cloud_max_z_m_, 0.1, 1000.0, "m");
       requireInRange("sensor_height", sensor_height_m_, -10.0, 10.0, "m");
     } catch (const ConfigError& e) {
       throw ConfigError(std::string(e.what()) + " (in namespace " + pnh.getNamespace() + ")");
@@ -196,7 +198,8 @@ class IcpSlamNode {
 
   void publishMap(const ros::Time& stamp) {
     PointCloud cloud;
-    cloud.points = voxelDownsample(slam_->map().points(), map_cloud_voxel_m_);
+    for (const Eigen::Vector3f& p : voxelDownsample(slam_->map().points(), map_cloud_voxel_m_))
+      if (p.z() <= map_cloud_max_z_m_) cloud.points.push_back(p);  // the ceiling cut away for the view
     cloud.setUnorganized();
     map_pub_.publish(ros_conv::toMsg(cloud, map_frame_, stamp));
     path_.header.stamp = stamp;
@@ -349,6 +352,7 @@ class IcpSlamNode {
   std::mutex mutex_;
   int max_cloud_points_ = 5000000;
   double map_cloud_voxel_m_ = 0.05;
+  double map_cloud_max_z_m_ = 2.0;  ///< [m] slam/map_cloud leaves out points above (the ceiling hides the room)
   double sensor_height_m_ = 0.45;
   std::string map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link";
   ros::Publisher pose_pub_, path_pub_, scan_pub_, map_pub_;

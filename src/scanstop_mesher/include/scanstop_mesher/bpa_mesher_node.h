@@ -11,6 +11,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include <string>
+#include <vector>
 
 #include "scanstop_mesher/mesh_markers.h"
 #include "scanstop_mesher/mesher.h"
@@ -40,6 +41,9 @@ struct MesherNodeConfig {
   /// empty view of a directory that holds no run would only puzzle the user (view_run.launch)
   bool require_map = false;
   double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)
+  /// Points and triangles above this height [m] (map frame, floor at 0) are not shown: the ceiling would
+  /// hide the room from rviz's view from above. Display only; meshes and files keep everything.
+  double display_max_z_m = 2.0;
   double map_poll_s = 2.0;             ///< period [s] of checking map_dir and load_mesh for changes
   /// How build_mesh meshes the map (an empty input_path): "bpa" (Ball Pivoting of the map's points),
   /// "marching_cubes" (of the fused TSDF map, fused_map.h) or "fused_bpa" (Ball Pivoting of the fused
@@ -66,6 +70,10 @@ class BpaMesherNode {
                        scanstop_msgs::BuildMesh::Response& res);
   /// build_mesh of the map by a fused mesh_method (marching_cubes, fused_bpa).
   void buildFusedAndPublish(const MesherConfig& mc, const std::string& output, scanstop_msgs::BuildMesh::Response& res);
+  /// The common end of both: writes the mesh to `output`, shows it, fills the response (message plus
+  /// "; <skipped>" for each skipped item) and logs it.
+  void finishMesh(const TriangleMesh& mesh, const std::string& output, size_t points, const std::string& message,
+                  const std::vector<std::string>& skipped, scanstop_msgs::BuildMesh::Response& res);
   /// Shows `mesh` (the contents of `file`) to the current subscribers; later subscribers get it from
   /// `file` (onMarkerSubscriber).
   void publishMesh(const TriangleMesh& mesh, const std::string& file);

@@ -4,6 +4,7 @@
 
 #include <visualization_msgs/MarkerArray.h>
 
+#include <limits>
 #include <string>
 
 #include "scanstop_common/cloud.h"
@@ -21,9 +22,12 @@ MeshColoring parseColoring(const std::string& value, const std::string& paramete
 /// blue (2nd percentile of the vertex heights) to red (98th percentile); normal colours are
 /// |n| as RGB. Frame frame_id, points in metres. A mesh of more than max_total triangles is shown
 /// by every k-th triangle (k = ceil(faces / max_total); 0 = no limit) to keep the messages small.
+/// Triangles with a vertex above max_z [m] are left out (the ceiling, which hides a room seen from
+/// above; +inf = none), before the stride and the colour scale are taken.
 visualization_msgs::MarkerArray meshToMarkers(const TriangleMesh& mesh, const std::string& frame_id,
                                               const ros::Time& stamp, MeshColoring coloring, size_t max_triangles,
-                                              size_t max_total = 0);
+                                              size_t max_total = 0,
+                                              float max_z = std::numeric_limits<float>::infinity());
 
 }  // namespace mesher
 }  // namespace scanstop
