@@ -10,6 +10,7 @@
 #include <random>
 #include <thread>
 
+#include "scanstop_common/options.h"
 #include "scanstop_pioneer/pioneer_driver.h"
 #include "scanstop_pioneer/pty_emulator.h"
 
@@ -105,7 +106,11 @@ int motionBench() {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  const scanstop::Options opts("pioneer_bench",
+                               "usage: pioneer_bench\n"
+                               "  the P2OS parser's throughput and the motion primitives' accuracy against the emulator\n");
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   int rc = parserBench();
   rc += motionBench();
   return rc == 0 ? 0 : 1;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "scanstop_common/options.h"
 #include "scanstop_common/scan_filter.h"
 #include "scanstop_urg/emulator.h"
 #include "scanstop_urg/scanner.h"
@@ -33,7 +34,21 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int reps = argc > 1 ? std::max(1, std::atoi(argv[1])) : 11;
+  int reps = 11;
+  std::string reps_text;
+  scanstop::Options opts("urg_bench",
+                         "usage: urg_bench [REPETITIONS]\n"
+                         "  REPETITIONS  runs of each measurement, the median is printed, [1, 10000] (default 11)\n");
+  opts.positional("REPETITIONS", reps_text, false);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
+  if (!reps_text.empty()) {
+    try {
+      reps = static_cast<int>(scanstop::parseIntegerArg("REPETITIONS", reps_text, 1, 10000));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "urg_bench: %s\n%s", e.what(), opts.usage().c_str());
+      return scanstop::kExitUsage;
+    }
+  }
   constexpr int kPlanes = 400;
   BoxRoomScene scene;
   double phi = 0.0;
