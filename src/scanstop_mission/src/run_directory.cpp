@@ -137,14 +137,17 @@ RunDirectory::RunDirectory(const std::string& path, const RunIdentity& identity)
     throw RunDirectoryError(path_, std::string("the run directory is not writable (") + std::strerror(errno) + ")");
 
   bool has_mission = exists(path_ + "/mission_state.yaml") || exists(path_ + "/map/poses.csv");
-  if (has_mission && !holdsScans(path_) && exists(path_ + "/mission_state.yaml")) {
-    // A mission that ended before its first scan (a start-up error: a bad start pose, a missing world)
-    // holds nothing to protect: the corrected launch starts afresh here. Its state is kept aside.
-    set_aside_ = path_ + "/mission_state.yaml.unstarted";
-    if (std::rename((path_ + "/mission_state.yaml").c_str(), set_aside_.c_str()) != 0)
-      throw RunDirectoryError(path_, std::string("cannot set aside mission_state.yaml of a mission that took no scan (") +
-                                         std::strerror(errno) + ")");
-    has_mission = exists(path_ + "/map/poses.csv");
+  if (has_mission && !holdsScans(path_)) {
+    // A mission that ended before its first scan (a start-up error: a bad start pose, a missing world;
+    // SLAM may have written a poses.csv without a scan line) holds nothing to protect: the corrected
+    // launch starts afresh here. Its state is kept aside.
+    if (exists(path_ + "/mission_state.yaml")) {
+      set_aside_ = path_ + "/mission_state.yaml.unstarted";
+      if (std::rename((path_ + "/mission_state.yaml").c_str(), set_aside_.c_str()) != 0)
+        throw RunDirectoryError(path_, std::string("cannot set aside mission_state.yaml of a mission that took no "
+                                                   "scan (") + std::strerror(errno) + ")");
+    }
+    has_mission = false;
   }
   RunIdentity recorded;
   bool have_recorded = false;

@@ -120,6 +120,15 @@ TEST(RunDirectory, AMissionThatEndedBeforeItsFirstScanIsSetAsideNotDefended) {
   EXPECT_EQ(second.setAside(), dir + "/mission_state.yaml.unstarted");
   EXPECT_EQ(MissionState::load(second.setAside()).state, State::Aborted);  // kept, not deleted
   EXPECT_EQ(RunIdentity::load(second.identityPath()).fields.at("start_pose"), "2,5,0");
+  // SLAM had written a poses.csv without a scan line: still nothing to protect.
+  const std::string header_only = tempDir() + "/run";
+  { RunDirectory first(header_only, identityOf("room_10x8", "0,4,0")); }
+  saveMission(header_only, "room_10x8", State::Aborted, 0);
+  ASSERT_EQ(::mkdir((header_only + "/map").c_str(), 0755), 0);
+  writeFileAtomic(header_only + "/map/poses.csv", "index,file\n");
+  RunDirectory corrected(header_only, identityOf("room_10x8", "2,5,0"));
+  EXPECT_FALSE(corrected.resumed());
+  EXPECT_EQ(RunIdentity::load(corrected.identityPath()).fields.at("start_pose"), "2,5,0");
   // One scan in the map (even when the state lists none) is a mission: another start pose is refused.
   const std::string scanned = tempDir() + "/run";
   { RunDirectory first(scanned, identityOf("room_10x8", "0,4,0")); }
