@@ -109,6 +109,18 @@ void writeFileAtomic(const std::string& path, const std::string& data) {
   syncDirectory(path);
 }
 
+void makeDirectories(const std::string& path) {
+  for (size_t pos = path.find('/', 1); pos != std::string::npos; pos = path.find('/', pos + 1)) {
+    const std::string parent = path.substr(0, pos);
+    if (::mkdir(parent.c_str(), 0755) != 0 && errno != EEXIST)
+      throw IoError(parent, std::string("cannot create directory: ") + std::strerror(errno));
+  }
+  if (::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST)
+    throw IoError(path, std::string("cannot create directory: ") + std::strerror(errno));
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw IoError(path, "exists but is not a directory");
+}
+
 std::string readFile(const std::string& path) {
   const std::string problem = inputFileProblem(path);
   if (!problem.empty()) throw IoError(path, problem);

@@ -54,18 +54,6 @@ std::string poseProblem(const Pose2D& p, const char* what) {
   return {};
 }
 
-/// Creates the directory and any missing parents (like mkdir -p).
-void makeDirectory(const std::string& path) {
-  for (size_t pos = path.find('/', 1); pos != std::string::npos; pos = path.find('/', pos + 1)) {
-    const std::string parent = path.substr(0, pos);
-    if (::mkdir(parent.c_str(), 0755) != 0 && errno != EEXIST)
-      throw IoError(parent, std::string("cannot create directory: ") + std::strerror(errno));
-  }
-  if (::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST)
-    throw IoError(path, std::string("cannot create directory: ") + std::strerror(errno));
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) throw IoError(path, "exists but is not a directory");
-}
 
 std::vector<std::string> splitCsv(const std::string& line) {
   std::vector<std::string> out;
@@ -204,8 +192,8 @@ std::string MapProblem::withoutSkipNote() const {
 MapDirectory::MapDirectory(const std::string& dir) : dir_(dir) {
   while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
   if (dir_.empty()) throw IoError(dir, "empty map directory name");
-  makeDirectory(dir_);
-  makeDirectory(dir_ + "/scans");
+  makeDirectories(dir_);
+  makeDirectories(dir_ + "/scans");
   load();
 }
 

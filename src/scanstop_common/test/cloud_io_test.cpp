@@ -150,6 +150,19 @@ TEST(CloudIo, CoordinatesBeyondTheLimitAreRefusedNamingThePoint) {
   EXPECT_EQ(readCloud(ok).size(), 3u);
 }
 
+TEST(FileUtil, MakeDirectoriesCreatesParentsAcceptsExistingAndNamesAFileInTheWay) {
+  TempDir dir;
+  const std::string nested = dir.file("a/b/c");
+  makeDirectories(nested);
+  struct stat st;
+  ASSERT_EQ(::stat(nested.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISDIR(st.st_mode));
+  makeDirectories(nested);  // exists already (another process may have made it a moment ago): fine
+  const std::string file = dir.write("f", "x");
+  expectIoError([&] { makeDirectories(file + "/sub"); }, file + "/sub", "cannot create directory: Not a directory");
+  expectIoError([&] { makeDirectories(file); }, file, "exists but is not a directory");
+}
+
 TEST(CloudIo, AtomicWriteLeavesNoTemporaryFiles) {
   TempDir dir;
   writeFileAtomic(dir.file("f.txt"), "one");

@@ -84,8 +84,13 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   if (n.frame_id.empty() || n.frame_id.front() == '/' || n.frame_id.find(' ') != std::string::npos)
     throw ConfigError("parameter '" + pnh.resolveName("frame_id") + "' = '" + n.frame_id +
                       "' must be a non-empty frame id without a leading '/' or spaces");
-  if (!n.run_dir.empty() && !isDirectory(n.run_dir) && ::mkdir(n.run_dir.c_str(), 0755) != 0)
-    throw ConfigError("parameter '" + pnh.resolveName("run_dir") + "' = '" + n.run_dir + "': cannot create the directory");
+  // With its parents: the run directory may not exist yet when this node starts before icp_slam_node
+  // (two_host_workstation.launch: a single mkdir failed there and only a respawn got past it).
+  if (!n.run_dir.empty()) try {
+      makeDirectories(n.run_dir);
+    } catch (const IoError& e) {
+      throw ConfigError("parameter '" + pnh.resolveName("run_dir") + "' = '" + n.run_dir + "': " + e.what());
+    }
 }
 
 std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, const NodeConfig& c) {

@@ -25,6 +25,11 @@ std::string inputFileProblem(const std::string& path);
 /// "<dir> is not a directory".
 std::string outputFileProblem(const std::string& path);
 
+/// Creates the directory and any missing parents (mkdir -p); one that exists already is fine, also when
+/// another process creates it at the same moment. Throws IoError naming the part that could not be
+/// made ("cannot create directory: <errno text>") or a path that exists but is not a directory.
+void makeDirectories(const std::string& path);
+
 /// Reads a whole file; throws IoError (inputFileProblem, "read error") naming the path.
 std::string readFile(const std::string& path);
 
