@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "scanstop_common/options.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_msgs/TakeScan.h"
 #include "scanstop_sim/simulator.h"
@@ -80,12 +81,11 @@ std::vector<Stat> timeInterleaved(int repeat, const std::vector<std::function<vo
   return out;
 }
 
-int usage(const std::string& why) {
-  std::cerr << "sim_bench: " << why << "\n"
-            << "usage: sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R] [--mixed-pixels]\n"
-               "       sim_bench --service [--planes N] [--repeat R]   (against a running sim_node)\n";
-  return 2;
-}
+constexpr const char* kUsage =
+    "usage: sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R] [--mixed-pixels]\n"
+    "       sim_bench --service [--planes N] [--repeat R] [NAME:=VALUE ...]   (against a running sim_node)\n"
+    "  --world   a world to scan, repeatable (default: turtlebot3_house and room_10x8)\n"
+    "  --planes  planes per scan, [1, 2000] (default 400); --repeat  runs per figure, [1, 1000] (default 7)\n";
 
 /// The documented start pose for a world file (by its base name), e.g. room_10x8 or turtlebot3_house.
 scanstop::Pose2D startPoseFor(const std::string& path) {
@@ -278,31 +278,24 @@ int main(int argc, char** argv) {
   std::string pose_text;
   int planes = 400, repeat = 7;
   bool service = false, mixed_pixels = false;
+  std::vector<std::string> remaps;
+  scanstop::Options opts("sim_bench", kUsage);
+  opts.custom("--world", [&](const std::string& v) { worlds.push_back(v); })
+      .text("--pose", pose_text)
+      .integer("--planes", planes, 1, 2000)
+      .integer("--repeat", repeat, 1, 1000)
+      .flag("--service", service)
+      .flag("--mixed-pixels", mixed_pixels)
+      .rest("NAME:=VALUE", remaps);
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   std::vector<char*> ros_args{argv[0]};
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg.find(":=") != std::string::npos) {
-      ros_args.push_back(argv[i]);
-      continue;
+  for (std::string& r : remaps) {
+    if (r.find(":=") == std::string::npos) {
+      std::cerr << "sim_bench: unexpected argument " << r << " (only ROS remappings NAME:=VALUE)\n" << kUsage;
+      return scanstop::kExitUsage;
     }
-    if (arg == "--service") {
-      service = true;
-      continue;
-    }
-    if (arg == "--mixed-pixels") {
-      mixed_pixels = true;
-      continue;
-    }
-    if (i + 1 >= argc) return usage("missing value after " + arg);
-    const std::string value = argv[++i];
-    if (arg == "--world") worlds.push_back(value);
-    else if (arg == "--pose") pose_text = value;
-    else if (arg == "--planes") planes = std::atoi(value.c_str());
-    else if (arg == "--repeat") repeat = std::atoi(value.c_str());
-    else return usage("unknown option " + arg);
+    ros_args.push_back(&r[0]);
   }
-  if (planes < 1 || planes > 2000) return usage("--planes must be in [1, 2000]");
-  if (repeat < 1 || repeat > 1000) return usage("--repeat must be in [1, 1000]");
   try {
     if (service) {
       int n = static_cast<int>(ros_args.size());

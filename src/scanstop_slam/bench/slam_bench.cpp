@@ -19,6 +19,7 @@
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/options.h"
 #include "scanstop_slam/icp_slam.h"
 
 using namespace scanstop;
@@ -52,33 +53,26 @@ std::vector<Entry> readList(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::cerr << "usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M]\n"
-                 "                  [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--degeneracy-remap 0|1]\n"
-                 "  LIST: lines 'FILE x y yaw' (scan in base_link, true pose in the world [m, rad])\n";
-    return 2;
-  }
+  slam::SlamConfig config;
+  std::string list_path, mode = "3dof", remap = config.icp.degeneracy_remap ? "1" : "0";
+  Options opts("slam_bench",
+               "usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M]\n"
+               "                  [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--degeneracy-remap 0|1]\n"
+               "  LIST: lines 'FILE x y yaw' (scan in base_link, true pose in the world [m, rad])\n");
+  opts.positional("LIST", list_path)
+      .choice("--mode", mode, {"3dof", "6dof"})
+      .real("--c-max", config.icp.c_max_m, 0.001, 5.0)
+      .real("--coarse-c-max", config.coarse_c_max_m, 0.001, 5.0)
+      .real("--refine-t-c", config.refine_t_c_m, 1e-9, 1.0)
+      .custom("--method", [&](const std::string& v) { config.icp.method = slam::parseIcpMethod(v, "--method"); })
+      .real("--degeneracy-ratio", config.icp.degeneracy_ratio, 0.0, 1.0)
+      .choice("--degeneracy-remap", remap, {"0", "1"});
+  if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
+  config.icp.six_dof = mode == "6dof";
+  config.icp.degeneracy_remap = remap == "1";
   try {
-    slam::SlamConfig config;
-    for (int i = 2; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (i + 1 >= argc) throw ConfigError(a + " needs a value");
-      const std::string v = argv[++i];
-      if (a == "--mode") {
-        if (v != "3dof" && v != "6dof") throw ConfigError("--mode must be 3dof or 6dof, not " + v);
-        config.icp.six_dof = v == "6dof";
-      } else if (a == "--c-max") config.icp.c_max_m = std::stod(v);
-      else if (a == "--coarse-c-max") config.coarse_c_max_m = std::stod(v);
-      else if (a == "--refine-t-c") config.refine_t_c_m = std::stod(v);
-      else if (a == "--method") config.icp.method = slam::parseIcpMethod(v, "--method");
-      else if (a == "--degeneracy-ratio") config.icp.degeneracy_ratio = std::stod(v);
-      else if (a == "--degeneracy-remap") {
-        if (v != "0" && v != "1") throw ConfigError("--degeneracy-remap must be 0 or 1, not " + v);
-        config.icp.degeneracy_remap = v == "1";
-      } else throw ConfigError("unknown option " + a);
-    }
     config.validate();
-    const std::vector<Entry> list = readList(argv[1]);
+    const std::vector<Entry> list = readList(list_path);
     std::vector<PointCloud> scans;
     size_t total_points = 0;
     for (const auto& e : list) {
