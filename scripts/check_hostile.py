@@ -10,7 +10,7 @@ wrong in one way and checks what a user gets:
     1 = the mission ended other than DONE; 0 only where the documented recovery applies),
   - a message that names the thing that is wrong (a regular expression on stdout + stderr),
   - within 10 s of wall time and 1 GB of peak memory (the largest process of the case, roslaunch's
-    children included),
+    children included; a case over time only is measured once more and both times are reported),
   - nothing lost or made up: the input map directory / run directory is byte-for-byte unchanged and no
     output file appears where the case says so.
 Results: RESULTS_DIR/hostile_user.xml (JUnit, one test case per case), RESULTS_DIR/hostile_user.md (the
@@ -365,7 +365,7 @@ def cases(fx):
                    "run_dir:=" + run("never_ran"), "rviz:=false"], {0, 1}, r"never_ran/map.*does not exist", launch=True))
     C.append(Case("launch: robot_explore.launch with a missing Pioneer port", 4,
                   ["bash", os.path.join(ROOT, "scripts", "robot_explore.sh"), "pioneer_port:=/dev/scanstop_none",
-                   "urg_port:=/dev/scanstop_none_urg", "run_dir:=" + run("robot"), "planes:=50"], {2},
+                   "urg_port:=/dev/scanstop_none_urg", "run_dir:=" + run("robot"), "planes:=50", "mesh:=false"], {2},
                   r"/dev/scanstop_none", launch=True))
     C.append(Case("launch: two_host_workstation.launch with run_dir a regular file", 1,
                   ["roslaunch", "--skip-log-check", os.path.join(ROOT, "launch", "two_host_workstation.launch"),
@@ -463,6 +463,11 @@ def main():
     xml = []
     for i, c in enumerate(all_cases):
         r = run_case(c, 11500 + i)
+        if r["problems"] and all(p.startswith("took ") for p in r["problems"]):
+            # Only over time: wall time on a shared machine varies; measured once more, both reported.
+            first = r["seconds"]
+            r = run_case(c, 11700 + i)
+            r["line"] = "(second try; the first took %.1f s) %s" % (first, r["line"])
         ok = not r["problems"]
         failed += 0 if ok else 1
         print("%s  %-70s rc %3d  %5.1f s  %6.0f MB  %s" % ("ok  " if ok else "FAIL", c.name[:70], r["rc"], r["seconds"],
