@@ -2,16 +2,12 @@
 
 #include <dirent.h>
 #include <malloc.h>
-#include <signal.h>
-#include <unistd.h>
 #include <scanstop_msgs/MissionStatus.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
-#include <iterator>
 #include <map>
 #include <sstream>
 

@@ -120,21 +120,22 @@ TEST(RunDirectory, AMissionThatEndedBeforeItsFirstScanIsSetAsideNotDefended) {
   EXPECT_EQ(second.setAside(), dir + "/mission_state.yaml.unstarted");
   EXPECT_EQ(MissionState::load(second.setAside()).state, State::Aborted);  // kept, not deleted
   EXPECT_EQ(RunIdentity::load(second.identityPath()).fields.at("start_pose"), "2,5,0");
+  // A run that ended at start-up in 0,4,0, with a map/poses.csv of the given text.
+  const auto endedWithPoses = [](const std::string& poses) {
+    const std::string run = tempDir() + "/run";
+    { RunDirectory first(run, identityOf("room_10x8", "0,4,0")); }
+    saveMission(run, "room_10x8", State::Aborted, 0);
+    EXPECT_EQ(::mkdir((run + "/map").c_str(), 0755), 0);
+    writeFileAtomic(run + "/map/poses.csv", poses);
+    return run;
+  };
   // SLAM had written a poses.csv without a scan line: still nothing to protect.
-  const std::string header_only = tempDir() + "/run";
-  { RunDirectory first(header_only, identityOf("room_10x8", "0,4,0")); }
-  saveMission(header_only, "room_10x8", State::Aborted, 0);
-  ASSERT_EQ(::mkdir((header_only + "/map").c_str(), 0755), 0);
-  writeFileAtomic(header_only + "/map/poses.csv", "index,file\n");
+  const std::string header_only = endedWithPoses("index,file\n");
   RunDirectory corrected(header_only, identityOf("room_10x8", "2,5,0"));
   EXPECT_FALSE(corrected.resumed());
   EXPECT_EQ(RunIdentity::load(corrected.identityPath()).fields.at("start_pose"), "2,5,0");
   // One scan in the map (even when the state lists none) is a mission: another start pose is refused.
-  const std::string scanned = tempDir() + "/run";
-  { RunDirectory first(scanned, identityOf("room_10x8", "0,4,0")); }
-  saveMission(scanned, "room_10x8", State::Failed, 0);
-  ASSERT_EQ(::mkdir((scanned + "/map").c_str(), 0755), 0);
-  writeFileAtomic(scanned + "/map/poses.csv", "index,file\n0,scans/scan_0000.pcd\n");
+  const std::string scanned = endedWithPoses("index,file\n0,scans/scan_0000.pcd\n");
   EXPECT_NE(messageOf(scanned, identityOf("room_10x8", "2,5,0")).find("start_pose is '0,4,0' there"), std::string::npos);
   // A state that lists a scan is a mission too.
   const std::string listed = finishedRun(identityOf("room_10x8", "0,4,0"));
