@@ -31,47 +31,40 @@ bool isDirectory(const std::string& p) {
 }  // namespace
 
 void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n) {
-  std::vector<std::string> known;
-  const auto optional = [&](const ros::NodeHandle& nh, const std::string& name, auto& value) {
-    known.push_back(name);
-    ros_params::optional(nh, name, value);
-  };
-  optional(pnh, "frame_id", n.frame_id);
+  ros_params::ParamReader params(pnh, "explorer_node");
+  params.known({"robot_body"});  // readRobotBody() below, when the body is set in this namespace
+  params.optional("frame_id", n.frame_id);
   double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
-  optional(pnh, "master_timeout", master_timeout);
+  params.optional("master_timeout", master_timeout);
   bool end_launch = false;  // read by main() after a start-up error; a known name here
-  optional(pnh, "end_launch_on_setup_error", end_launch);
-  optional(pnh, "map_dir", n.map_dir);
-  optional(pnh, "run_dir", n.run_dir);
-  optional(pnh, "image_scale", n.image_scale);
-  optional(pnh, "max_coordinate_m", n.max_coordinate_m);
-  optional(pnh, "max_unreachable", n.max_unreachable);
-  optional(pnh, "max_point_distance_m", n.max_point_distance_m);
+  params.optional("end_launch_on_setup_error", end_launch);
+  params.optional("map_dir", n.map_dir);
+  params.optional("run_dir", n.run_dir);
+  params.optional("image_scale", n.image_scale);
+  params.optional("max_coordinate_m", n.max_coordinate_m);
+  params.optional("max_unreachable", n.max_unreachable);
+  params.optional("max_point_distance_m", n.max_point_distance_m);
   // ROS parameter names are the config fields' names (so a ConfigError names the parameter); the
   // one list (parameters.h) that the offline tools' --config reads too.
-  forEachParameter(c, [&](const char* name, auto& value) { optional(pnh, name, value); });
+  forEachParameter(c, [&](const char* name, auto& value) { params.optional(name, value); });
   // The body (robot_body/..., config/robot_body.yaml) gives the inflation and the obstacle layer:
   // robot_radius_m = radius + inflation_margin_m, the layer's top = height + obstacle_height_margin_m.
   // ~robot_radius_m / ~robot_height_m set explicitly override them (a WARN names both).
   const RobotBody body = ros_params::readRobotBody(pnh);
   BodyMargins margins;
-  optional(pnh, "inflation_margin_m", margins.inflation_margin_m);
-  optional(pnh, "obstacle_height_margin_m", margins.obstacle_height_margin_m);
+  params.optional("inflation_margin_m", margins.inflation_margin_m);
+  params.optional("obstacle_height_margin_m", margins.obstacle_height_margin_m);
   requireInRange(pnh.resolveName("inflation_margin_m"), margins.inflation_margin_m, 0.0, 1.0, "m");
   requireInRange(pnh.resolveName("obstacle_height_margin_m"), margins.obstacle_height_margin_m, 0.0, 1.0, "m");
   applyBody(body, margins, c);
   const auto override_body = [&](const std::string& name, double& value, double from_body) {
-    known.push_back(name);
-    if (!pnh.hasParam(name)) return;
-    ros_params::optional(pnh, name, value);
+    if (!params.optional(name, value)) return;
     ROS_WARN("explorer_node: %s = %.3f m overrides %.3f m from the robot body (config/robot_body.yaml)",
              pnh.resolveName(name).c_str(), value, from_body);
   };
   override_body("robot_radius_m", c.planner.robot_radius_m, c.planner.robot_radius_m);
   override_body("robot_height_m", c.floor.robot_height_m, c.floor.robot_height_m);
-  for (const std::string& name : ros_params::unknownParameters(pnh, known))
-    ROS_WARN("explorer_node: ignoring unknown parameter '%s' (a typo? the names carry their unit, e.g. k_r_m)",
-             name.c_str());
+  params.rejectUnknown();
   try {
     c.validate();
   } catch (const ConfigError& e) {

@@ -167,6 +167,8 @@ class ExplorerBadInput(unittest.TestCase):
                              "'/bad_explorer_7/max_coordinate_m' = 0.5 m is out of range [1, 1e+06 m]")
         self.check_bad_param(8, [('frame_id', '/map')], "'/bad_explorer_8/frame_id' = '/map'")
         self.check_bad_param(9, [('d_max_m', 'far')], "parameter '/bad_explorer_9/d_max_m' has the wrong type")
+        self.check_bad_param(10, [('k_r', '2.5')], "unknown parameter '/bad_explorer_10/k_r' (did you mean 'k_r_m'?): "
+                             "nothing reads it; explorer_node reads ", "d_max_m")
 
     @classmethod
     def tearDownClass(cls):

@@ -168,6 +168,8 @@ class MesherBadInput(unittest.TestCase):
         self.check_bad_param(5, [('default_output', '/tmp/mesh.obj')], "'default_output' = '/tmp/mesh.obj' must end in .stl or .ply")
         self.check_bad_param(6, [('map_poll_s', '0')], "'map_poll_s' = 0 s must be a finite value > 0")
         self.check_bad_param(7, [('map_voxel_m', 'fine')], "parameter '/bad_mesher_7/map_voxel_m' has the wrong type")
+        self.check_bad_param(8, [('map_voxel', '0.01')], "unknown parameter '/bad_mesher_8/map_voxel' (did you mean "
+                             "'map_voxel_m'?): nothing reads it; bpa_mesher_node reads ", "fused_carve_m")
 
     @classmethod
     def tearDownClass(cls):

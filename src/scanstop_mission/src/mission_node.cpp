@@ -75,68 +75,69 @@ std::map<std::string, std::string> readIdentityParam(const ros::NodeHandle& pnh)
 }  // namespace
 
 MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
-  config_.run_dir = ros_params::require<std::string>(pnh, "run_dir");
-  ros_params::optional(pnh, "planes", config_.planes);
-  ros_params::optional(pnh, "max_scans", config_.max_scans);
-  ros_params::optional(pnh, "d_max", config_.d_max_m);
-  ros_params::optional(pnh, "waypoint_tolerance", config_.waypoint_tolerance_m);
-  ros_params::optional(pnh, "heading_tolerance", config_.heading_tolerance_rad);
-  ros_params::optional(pnh, "min_scan_travel", config_.min_scan_travel_m);
-  ros_params::optional(pnh, "scan_on_the_way", config_.scan_on_the_way);
-  ros_params::optional(pnh, "scan_error_bound", config_.scan_error_bound_m);
-  ros_params::optional(pnh, "return_home", config_.return_home);
-  ros_params::optional(pnh, "home_tolerance", config_.home_tolerance_m);
-  ros_params::optional(pnh, "home_scan_travel", config_.home_scan_travel_m);
-  ros_params::optional(pnh, "max_step_retries", config_.max_step_retries);
-  ros_params::optional(pnh, "contact_backoff", config_.contact_backoff_m);
-  ros_params::optional(pnh, "contact_offset", config_.contact_offset_m);
-  ros_params::optional(pnh, "max_contacts", config_.max_contacts);
-  ros_params::optional(pnh, "contact_point_radius", config_.contact_point_radius_m);
-  ros_params::optional(pnh, "leg_check", config_.leg_check);
+  ros_params::ParamReader params(pnh, "mission_node");
+  config_.run_dir = params.require<std::string>("run_dir");
+  params.optional("planes", config_.planes);
+  params.optional("max_scans", config_.max_scans);
+  params.optional("d_max", config_.d_max_m);
+  params.optional("waypoint_tolerance", config_.waypoint_tolerance_m);
+  params.optional("heading_tolerance", config_.heading_tolerance_rad);
+  params.optional("min_scan_travel", config_.min_scan_travel_m);
+  params.optional("scan_on_the_way", config_.scan_on_the_way);
+  params.optional("scan_error_bound", config_.scan_error_bound_m);
+  params.optional("return_home", config_.return_home);
+  params.optional("home_tolerance", config_.home_tolerance_m);
+  params.optional("home_scan_travel", config_.home_scan_travel_m);
+  params.optional("max_step_retries", config_.max_step_retries);
+  params.optional("contact_backoff", config_.contact_backoff_m);
+  params.optional("contact_offset", config_.contact_offset_m);
+  params.optional("max_contacts", config_.max_contacts);
+  params.optional("contact_point_radius", config_.contact_point_radius_m);
+  params.optional("leg_check", config_.leg_check);
   // The swept disc and the heights of the leg check come from the body (robot_body/...,
   // config/robot_body.yaml): radius + leg_check_body_margin, up to the body's height.
   // ~leg_check_radius / ~leg_check_max_z set explicitly override them.
   {
     const RobotBody body = ros_params::readRobotBody(pnh);
     double body_margin = 0.02;
-    ros_params::optional(pnh, "leg_check_body_margin", body_margin);
+    params.optional("leg_check_body_margin", body_margin);
     if (!(body_margin >= 0.0 && body_margin <= 1.0))
       throw ConfigError("parameter '" + pnh.resolveName("leg_check_body_margin") + "' = " + std::to_string(body_margin) +
                         " m must be in [0, 1] m");
     config_.leg_check_radius_m = body.radius_m + body_margin;
     config_.leg_check_max_z_m = body.height_m;
   }
-  ros_params::optional(pnh, "leg_check_radius", config_.leg_check_radius_m);
-  ros_params::optional(pnh, "leg_check_margin", config_.leg_check_margin_m);
-  ros_params::optional(pnh, "obstruction_standoff", config_.obstruction_standoff_m);
-  ros_params::optional(pnh, "leg_check_min_z", config_.leg_check_min_z_m);
-  ros_params::optional(pnh, "leg_check_max_z", config_.leg_check_max_z_m);
-  ros_params::optional(pnh, "leg_check_self", config_.leg_check_self_m);
-  ros_params::optional(pnh, "leg_check_min_points", config_.leg_check_min_points);
-  ros_params::optional(pnh, "leg_check_turn_error", config_.leg_check_turn_error);
-  ros_params::optional(pnh, "leg_check_drift", config_.leg_check_drift);
-  ros_params::optional(pnh, "leg_check_distance_error", config_.leg_check_distance_error);
-  ros_params::optional(pnh, "leg_check_turn_position", config_.leg_check_turn_position_m_per_rad);
-  ros_params::optional(pnh, "reverse_legs", config_.reverse_legs);
-  ros_params::optional(pnh, "relocalize_min_travel", config_.relocalize_min_travel_m);
-  ros_params::optional(pnh, "relocalize_min_turn", config_.relocalize_min_turn_rad);
-  ros_params::optional(pnh, "leg_sidestep", config_.leg_sidestep_m);
-  ros_params::optional(pnh, "retry_backoff", config_.retry_backoff_s);
-  ros_params::optional(pnh, "max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
-  ros_params::optional(pnh, "build_mesh", config_.build_mesh);
-  ros_params::optional(pnh, "world", config_.world);
+  params.optional("leg_check_radius", config_.leg_check_radius_m);
+  params.optional("leg_check_margin", config_.leg_check_margin_m);
+  params.optional("obstruction_standoff", config_.obstruction_standoff_m);
+  params.optional("leg_check_min_z", config_.leg_check_min_z_m);
+  params.optional("leg_check_max_z", config_.leg_check_max_z_m);
+  params.optional("leg_check_self", config_.leg_check_self_m);
+  params.optional("leg_check_min_points", config_.leg_check_min_points);
+  params.optional("leg_check_turn_error", config_.leg_check_turn_error);
+  params.optional("leg_check_drift", config_.leg_check_drift);
+  params.optional("leg_check_distance_error", config_.leg_check_distance_error);
+  params.optional("leg_check_turn_position", config_.leg_check_turn_position_m_per_rad);
+  params.optional("reverse_legs", config_.reverse_legs);
+  params.optional("relocalize_min_travel", config_.relocalize_min_travel_m);
+  params.optional("relocalize_min_turn", config_.relocalize_min_turn_rad);
+  params.optional("leg_sidestep", config_.leg_sidestep_m);
+  params.optional("retry_backoff", config_.retry_backoff_s);
+  params.optional("max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
+  params.optional("build_mesh", config_.build_mesh);
+  params.optional("world", config_.world);
   config_.mesh_output = config_.run_dir + "/mesh.ply";
-  ros_params::optional(pnh, "mesh_output", config_.mesh_output);
+  params.optional("mesh_output", config_.mesh_output);
   std::string map_dir = config_.run_dir + "/map";
-  ros_params::optional(pnh, "map_dir", map_dir);
+  params.optional("map_dir", map_dir);
   map_dir_ = map_dir;
-  ros_params::optional(pnh, "world_file", world_file_);
-  ros_params::optional(pnh, "world_frame", world_frame_);
-  ros_params::optional(pnh, "map_frame", map_frame_);
-  robot_radius_given_ = pnh.hasParam("robot_radius");
-  ros_params::optional(pnh, "robot_radius", robot_radius_m_);
-  ros_params::optional(pnh, "explorer_ns", explorer_ns_);
-  ros_params::optional(pnh, "surface_planes", surface_planes_);
+  params.optional("world_file", world_file_);
+  params.optional("world_frame", world_frame_);
+  params.optional("map_frame", map_frame_);
+  robot_radius_given_ = params.has("robot_radius");
+  params.optional("robot_radius", robot_radius_m_);
+  params.optional("explorer_ns", explorer_ns_);
+  params.optional("surface_planes", surface_planes_);
   if (surface_planes_ < 0 || surface_planes_ > 2000)
     throw ConfigError("parameter '" + pnh.resolveName("surface_planes") + "' = " + std::to_string(surface_planes_) +
                       " must be in [0, 2000] (0: no surface coverage)");
@@ -147,12 +148,12 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     throw ConfigError("parameters '" + pnh.resolveName("world_frame") + "' and '" + pnh.resolveName("map_frame") +
                       "' must be two different, non-empty frame ids");
   CallTimeouts timeouts;
-  ros_params::optional(pnh, "wait_for_service_timeout", timeouts.wait_for_service_s);
-  ros_params::optional(pnh, "scan_timeout", timeouts.scan_s);
-  ros_params::optional(pnh, "motion_timeout", timeouts.motion_s);
-  ros_params::optional(pnh, "register_timeout", timeouts.register_s);
-  ros_params::optional(pnh, "plan_timeout", timeouts.plan_s);
-  ros_params::optional(pnh, "mesh_timeout", timeouts.mesh_s);
+  params.optional("wait_for_service_timeout", timeouts.wait_for_service_s);
+  params.optional("scan_timeout", timeouts.scan_s);
+  params.optional("motion_timeout", timeouts.motion_s);
+  params.optional("register_timeout", timeouts.register_s);
+  params.optional("plan_timeout", timeouts.plan_s);
+  params.optional("mesh_timeout", timeouts.mesh_s);
   for (const auto& [name, value] : {std::pair<const char*, double>{"wait_for_service_timeout", timeouts.wait_for_service_s},
                                     {"scan_timeout", timeouts.scan_s},
                                     {"motion_timeout", timeouts.motion_s},
@@ -164,10 +165,10 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
                         " must be in (0, 1e6) s");
   }
   bool autostart = true;
-  ros_params::optional(pnh, "autostart", autostart);
-  ros_params::optional(pnh, "shutdown_when_done", shutdown_when_done_);
-  ros_params::optional(pnh, "html_report", html_report_);
-  ros_params::optional(pnh, "report_script", report_script_);
+  params.optional("autostart", autostart);
+  params.optional("shutdown_when_done", shutdown_when_done_);
+  params.optional("html_report", html_report_);
+  params.optional("report_script", report_script_);
   if (html_report_ && report_script_.empty()) {
     // catkin_install_python puts make_report.py beside mission_node (devel and install space).
     char exe[4096];
@@ -175,27 +176,11 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     const std::string self = n > 0 ? std::string(exe, static_cast<size_t>(n)) : std::string();
     report_script_ = self.substr(0, self.find_last_of('/') + 1) + "make_report.py";
   }
-  ros_params::optional(pnh, "master_timeout", master_timeout_s_);
+  params.optional("master_timeout", master_timeout_s_);
+  // run_identity: readIdentityParam() below; robot_body/...: readRobotBody() (when set in this namespace).
+  params.known({"run_identity", "robot_body"});
   // A misspelt parameter would silently keep its default: refuse it.
-  const std::vector<std::string> known = {
-      "run_dir", "planes", "max_scans", "d_max", "waypoint_tolerance", "heading_tolerance", "min_scan_travel",
-      "scan_on_the_way", "scan_error_bound",
-      "return_home", "home_tolerance", "home_scan_travel", "contact_backoff", "contact_offset", "max_contacts",
-      "contact_point_radius", "leg_check", "leg_check_radius", "leg_check_body_margin", "leg_check_margin",
-      "obstruction_standoff",
-      "leg_check_min_z", "leg_check_max_z", "leg_check_self", "leg_check_min_points", "leg_check_turn_error",
-      "leg_check_drift", "leg_check_distance_error", "leg_check_turn_position", "reverse_legs", "relocalize_min_travel", "relocalize_min_turn", "leg_sidestep", "max_step_retries", "retry_backoff",
-      "max_consecutive_failed_cycles", "build_mesh", "world", "map_dir", "wait_for_service_timeout", "scan_timeout",
-      "motion_timeout", "register_timeout", "plan_timeout", "mesh_timeout", "autostart", "shutdown_when_done",
-      "mesh_output", "world_file", "world_frame", "map_frame", "robot_radius", "explorer_ns", "surface_planes", "run_identity",
-      "master_timeout", "html_report", "report_script"};
-  const std::vector<std::string> unknown = ros_params::unknownParameters(pnh, known);
-  if (!unknown.empty()) {
-    std::string names, all;
-    for (const std::string& n : unknown) names += (names.empty() ? "" : ", ") + n;
-    for (const std::string& n : known) all += (all.empty() ? "" : ", ") + n;
-    throw ConfigError("unknown parameter(s) " + names + " (misspelt?); mission_node knows " + all);
-  }
+  params.rejectUnknown();
   try {
     config_.validate();
   } catch (const ConfigError& e) {

@@ -32,7 +32,8 @@ BAD_PARAMETERS = [
     (["_wait_for_service_timeout:=0.0"], ["/mission_node/wait_for_service_timeout", "must be in (0, 1e6) s"]),
     (["_mesh_output:=/tmp/mesh.obj"], ["'mesh_output'", "/tmp/mesh.obj", "must end in .ply or .stl"]),
     (["_map_dir:="], ["/mission_node/map_dir", "empty"]),
-    (["_plannes:=50"], ["unknown parameter", "/mission_node/plannes"]),
+    (["_plannes:=50"], ["unknown parameter '/mission_node/plannes' (did you mean 'planes'?): nothing reads it; "
+                        "mission_node reads ", "max_scans"]),
     (["_run_dir:=/proc/scanstop_no_such_dir"], ["/proc/scanstop_no_such_dir", "cannot create the run directory"]),
     ([None], ["required parameter '/mission_node/run_dir' is not set"]),
 ]

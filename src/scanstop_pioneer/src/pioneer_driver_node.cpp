@@ -14,87 +14,71 @@ namespace scanstop {
 namespace pioneer {
 namespace {
 
-/// Every private parameter the node reads (readParameters and the frame parameters).
-const char* const kKnownParameters[] = {
-    "port", "baud", "odom_frame", "base_frame", "publish_tf", "robot/subclass", "robot/angle_conv",
-    "robot/dist_conv", "robot/vel_conv", "robot/range_conv", "robot/diff_conv", "robot/max_velocity",
-    "robot/max_rot_velocity", "reply_timeout", "sync_attempts", "close_wait", "sip_timeout", "reconnect_period",
-    "pulse_period", "cmd_vel_timeout", "max_linear_speed", "max_angular_speed", "motion/linear_speed",
-    "motion/angular_speed", "motion/min_linear_speed", "motion/min_angular_speed", "motion/linear_decel",
-    "motion/angular_decel", "motion/approach_distance", "motion/approach_angle", "motion/distance_tolerance",
-    "motion/angle_tolerance", "motion/timeout_factor", "motion/timeout_extra", "motion/stall_time",
-    "motion/motors_disabled_time", "motion/settle_timeout", "motion/max_forward", "motion/max_rotate",
-    "diagnostic_period", "master_timeout"};
-
-template <typename T>
-void opt(const ros::NodeHandle& pnh, const std::string& name, T& value) {
-  ros_params::optional(pnh, name, value);
-}
-
 }  // namespace
 
-DriverConfig PioneerDriverNode::readParameters(const ros::NodeHandle& pnh) {
-  DriverConfig c;
-  c.port = ros_params::require<std::string>(pnh, "port");
-  opt(pnh, "baud", c.baud);
+PioneerDriverNode::Parameters PioneerDriverNode::readParameters(ros_params::ParamReader& params) {
+  Parameters p;
+  DriverConfig& c = p.driver;
+  const auto opt = [&params](const std::string& name, auto& value) { params.optional(name, value); };
+  params.known({"master_timeout", "diagnostic_period"});  // main()'s watchdog; diagnostic_updater's
+  c.port = params.require<std::string>("port");
+  opt("baud", c.baud);
   RobotParams& r = c.robot;
-  opt(pnh, "robot/subclass", r.subclass);
-  opt(pnh, "robot/angle_conv", r.angle_conv_rad);
-  opt(pnh, "robot/dist_conv", r.dist_conv_mm);
-  opt(pnh, "robot/vel_conv", r.vel_conv);
-  opt(pnh, "robot/range_conv", r.range_conv_mm);
-  opt(pnh, "robot/diff_conv", r.diff_conv);
-  opt(pnh, "robot/max_velocity", r.max_velocity_mps);
-  opt(pnh, "robot/max_rot_velocity", r.max_rot_velocity_radps);
-  opt(pnh, "reply_timeout", c.client.reply_timeout_s);
-  opt(pnh, "sync_attempts", c.client.sync_attempts);
-  opt(pnh, "close_wait", c.client.close_wait_s);
-  opt(pnh, "sip_timeout", c.sip_timeout_s);
-  opt(pnh, "reconnect_period", c.reconnect_period_s);
-  opt(pnh, "pulse_period", c.pulse_period_s);
-  opt(pnh, "cmd_vel_timeout", c.cmd_vel_timeout_s);
-  opt(pnh, "max_linear_speed", c.max_linear_speed_mps);
-  opt(pnh, "max_angular_speed", c.max_angular_speed_radps);
+  opt("robot/subclass", r.subclass);
+  opt("robot/angle_conv", r.angle_conv_rad);
+  opt("robot/dist_conv", r.dist_conv_mm);
+  opt("robot/vel_conv", r.vel_conv);
+  opt("robot/range_conv", r.range_conv_mm);
+  opt("robot/diff_conv", r.diff_conv);
+  opt("robot/max_velocity", r.max_velocity_mps);
+  opt("robot/max_rot_velocity", r.max_rot_velocity_radps);
+  opt("reply_timeout", c.client.reply_timeout_s);
+  opt("sync_attempts", c.client.sync_attempts);
+  opt("close_wait", c.client.close_wait_s);
+  opt("sip_timeout", c.sip_timeout_s);
+  opt("reconnect_period", c.reconnect_period_s);
+  opt("pulse_period", c.pulse_period_s);
+  opt("cmd_vel_timeout", c.cmd_vel_timeout_s);
+  opt("max_linear_speed", c.max_linear_speed_mps);
+  opt("max_angular_speed", c.max_angular_speed_radps);
   MotionConfig& m = c.motion;
-  opt(pnh, "motion/linear_speed", m.linear_speed_mps);
-  opt(pnh, "motion/angular_speed", m.angular_speed_radps);
-  opt(pnh, "motion/min_linear_speed", m.min_linear_speed_mps);
-  opt(pnh, "motion/min_angular_speed", m.min_angular_speed_radps);
-  opt(pnh, "motion/linear_decel", m.linear_decel_mps2);
-  opt(pnh, "motion/angular_decel", m.angular_decel_radps2);
-  opt(pnh, "motion/approach_distance", m.approach_distance_m);
-  opt(pnh, "motion/approach_angle", m.approach_angle_rad);
-  opt(pnh, "motion/distance_tolerance", m.distance_tolerance_m);
-  opt(pnh, "motion/angle_tolerance", m.angle_tolerance_rad);
-  opt(pnh, "motion/timeout_factor", m.timeout_factor);
-  opt(pnh, "motion/timeout_extra", m.timeout_extra_s);
-  opt(pnh, "motion/stall_time", m.stall_time_s);
-  opt(pnh, "motion/motors_disabled_time", m.motors_disabled_time_s);
-  opt(pnh, "motion/settle_timeout", m.settle_timeout_s);
-  opt(pnh, "motion/max_forward", m.max_forward_m);
-  opt(pnh, "motion/max_rotate", m.max_rotate_rad);
+  opt("motion/linear_speed", m.linear_speed_mps);
+  opt("motion/angular_speed", m.angular_speed_radps);
+  opt("motion/min_linear_speed", m.min_linear_speed_mps);
+  opt("motion/min_angular_speed", m.min_angular_speed_radps);
+  opt("motion/linear_decel", m.linear_decel_mps2);
+  opt("motion/angular_decel", m.angular_decel_radps2);
+  opt("motion/approach_distance", m.approach_distance_m);
+  opt("motion/approach_angle", m.approach_angle_rad);
+  opt("motion/distance_tolerance", m.distance_tolerance_m);
+  opt("motion/angle_tolerance", m.angle_tolerance_rad);
+  opt("motion/timeout_factor", m.timeout_factor);
+  opt("motion/timeout_extra", m.timeout_extra_s);
+  opt("motion/stall_time", m.stall_time_s);
+  opt("motion/motors_disabled_time", m.motors_disabled_time_s);
+  opt("motion/settle_timeout", m.settle_timeout_s);
+  opt("motion/max_forward", m.max_forward_m);
+  opt("motion/max_rotate", m.max_rotate_rad);
   try {
     c.validate();
   } catch (const ConfigError& e) {
-    throw ConfigError(std::string(e.what()) + " (private namespace " + pnh.getNamespace() + ")");
+    throw ConfigError(std::string(e.what()) + " (private namespace " + params.handle().getNamespace() + ")");
   }
-  return c;
-}
-
-std::vector<std::string> PioneerDriverNode::unknownParameters(const ros::NodeHandle& pnh) {
-  return ros_params::unknownParameters(pnh, std::vector<std::string>(std::begin(kKnownParameters), std::end(kKnownParameters)));
+  opt("odom_frame", p.odom_frame);
+  opt("base_frame", p.base_frame);
+  opt("publish_tf", p.publish_tf);
+  params.frames({{"odom_frame", p.odom_frame}, {"base_frame", p.base_frame}});
+  return p;
 }
 
 PioneerDriverNode::PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : updater_(nh, pnh) {
-  const DriverConfig config = readParameters(pnh);
-  for (const std::string& name : unknownParameters(pnh))
-    ROS_WARN("pioneer_driver: unknown parameter '%s' is ignored (see config/pioneer.yaml for the names)", name.c_str());
-  opt(pnh, "odom_frame", odom_frame_);
-  opt(pnh, "base_frame", base_frame_);
-  opt(pnh, "publish_tf", publish_tf_);
-  if (odom_frame_.empty() || base_frame_.empty() || odom_frame_ == base_frame_)
-    throw ConfigError("parameters '" + pnh.resolveName("odom_frame") + "' and '" + pnh.resolveName("base_frame") +
-                      "' must be non-empty and differ");
+  ros_params::ParamReader params(pnh, "pioneer_driver");
+  const Parameters parameters = readParameters(params);
+  params.rejectUnknown();
+  const DriverConfig& config = parameters.driver;
+  odom_frame_ = parameters.odom_frame;
+  base_frame_ = parameters.base_frame;
+  publish_tf_ = parameters.publish_tf;
 
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 20);
   battery_pub_ = nh.advertise<sensor_msgs::BatteryState>("battery", 5);

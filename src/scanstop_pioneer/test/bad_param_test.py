@@ -50,12 +50,16 @@ class BadParameters(unittest.TestCase):
         self.check(7, [('baud', '12345')], "'baud' = 12345 must be one of 9600, 19200")
 
     def test_equal_frames(self):
-        self.check(8, [('odom_frame', 'base_link')], "odom_frame' and", "base_frame' must be non-empty and differ")
+        self.check(8, [('odom_frame', 'base_link')], "odom_frame' and", "base_frame' are both 'base_link'")
 
     def test_missing_port(self):
         rc, out = self.run_node(9, [])
         self.assertNotEqual(rc, 0, out)
         self.assertIn("required parameter '/bad_pioneer_9/port' is not set", out)
+
+    def test_unknown_parameter(self):
+        self.check(11, [('motion/linear_sped', '0.1')], "unknown parameter '/bad_pioneer_11/motion/linear_sped' (did you "
+                   "mean 'motion/linear_speed'?): nothing reads it; pioneer_driver reads ", "motion/max_forward")
 
     def test_wrong_type(self):
         self.check(10, [('sip_timeout', 'long')], "parameter '/bad_pioneer_10/sip_timeout' has the wrong type")

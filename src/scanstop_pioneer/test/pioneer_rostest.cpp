@@ -24,6 +24,8 @@ namespace {
 
 using scanstop::pioneer::DriverConfig;
 using scanstop::pioneer::PioneerDriverNode;
+namespace ros_params = scanstop::ros_params;
+using scanstop::ConfigError;
 
 /// Watches odom: counts messages and records anything that would be garbage.
 struct OdomWatch {
@@ -144,7 +146,8 @@ TEST(PioneerDriver, A_ConnectsClosingTheSessionLeftOpen) {
 }
 
 TEST(PioneerDriver, B_ConfigFileEqualsTheCodeDefaults) {
-  const DriverConfig read = PioneerDriverNode::readParameters(ros::NodeHandle("/pioneer_driver"));
+  ros_params::ParamReader params(ros::NodeHandle("/pioneer_driver"), "pioneer_driver");
+  const DriverConfig read = PioneerDriverNode::readParameters(params).driver;
   DriverConfig d;
   EXPECT_EQ(read.baud, d.baud);
   EXPECT_EQ(read.robot.subclass, d.robot.subclass);
@@ -184,22 +187,35 @@ TEST(PioneerDriver, B_ConfigFileEqualsTheCodeDefaults) {
   EXPECT_DOUBLE_EQ(m.max_forward_m, dm.max_forward_m);
   EXPECT_NEAR(m.max_rotate_rad, dm.max_rotate_rad, 1e-4);
   // Every key of config/pioneer.yaml is one the node reads (no typos).
-  const auto unknown = PioneerDriverNode::unknownParameters(ros::NodeHandle("/pioneer_driver"));
+  const auto unknown = params.unknown();
   EXPECT_TRUE(unknown.empty()) << unknown.front();
   // A bad value is refused with the parameter's name.
   ros::NodeHandle bad("/bad_pioneer");
   bad.setParam("port", "/dev/null");
   bad.setParam("motion/linear_speed", -1.0);
   try {
-    PioneerDriverNode::readParameters(bad);
+    ros_params::ParamReader bad_params(bad, "pioneer_driver");
+    PioneerDriverNode::readParameters(bad_params);
     FAIL() << "expected ConfigError";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("motion/linear_speed"), std::string::npos) << e.what();
   }
+  // A misspelt parameter: refused, named, with the name it was meant to be.
+  bad.setParam("motion/linear_speed", 0.1);
   bad.setParam("motion/linear_sped", 0.1);
-  const auto typo = PioneerDriverNode::unknownParameters(bad);
-  ASSERT_EQ(typo.size(), 1u);
-  EXPECT_EQ(typo[0], "/bad_pioneer/motion/linear_sped");
+  ros_params::ParamReader typo_params(bad, "pioneer_driver");
+  PioneerDriverNode::readParameters(typo_params);
+  ASSERT_EQ(typo_params.unknown().size(), 1u);
+  EXPECT_EQ(typo_params.unknown()[0], "/bad_pioneer/motion/linear_sped");
+  try {
+    typo_params.rejectUnknown();
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown parameter '/bad_pioneer/motion/linear_sped' (did you mean "
+                                         "'motion/linear_speed'?)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(PioneerDriver, C_RotateAndForward) {

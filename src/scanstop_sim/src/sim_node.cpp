@@ -37,16 +37,18 @@ nav_msgs::Odometry odometryMsg(const Pose2D& pose, const std::string& frame, con
 }  // namespace
 
 SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
-  const std::string world_path = ros_params::require<std::string>(pnh, "world");
+  ros_params::ParamReader params(pnh, "sim_node");
+  params.known({"master_timeout", "end_launch_on_setup_error"});  // main()'s
+  const std::string world_path = params.require<std::string>("world");
   WorldOptions world_options;
   bool allow_no_floor = false;
-  ros_params::optional(pnh, "allow_no_floor", allow_no_floor);
+  params.optional("allow_no_floor", allow_no_floor);
   world_options.require_floor = !allow_no_floor;
   // Surface materials (issue #20): "" takes <world>.materials.yaml next to the STL when it exists.
-  ros_params::optional(pnh, "materials_file", world_options.materials_file);
+  params.optional("materials_file", world_options.materials_file);
 
   std::string profile = "thesis";
-  ros_params::optional(pnh, "error_profile", profile);
+  params.optional("error_profile", profile);
   SimConfig config;
   try {
     config.errors = makeProfile(profile);
@@ -54,81 +56,95 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     throw ConfigError("parameter '" + pnh.resolveName("error_profile") + "' = '" + profile + "': " + e.what());
   }
   int seed = 1;
-  ros_params::optional(pnh, "seed", seed);
+  params.optional("seed", seed);
   if (seed < 0) throw ConfigError("parameter '" + pnh.resolveName("seed") + "' = " + std::to_string(seed) + " must be >= 0");
   config.seed = static_cast<uint64_t>(seed);
   // Every model field can be overridden by a parameter of the same name (config/sim.yaml).
   ScannerConfig& sc = config.scanner;
-  ros_params::optional(pnh, "scanner/height", sc.height_m);
-  ros_params::optional(pnh, "scanner/x_offset", sc.x_offset_m);
-  ros_params::optional(pnh, "scanner/mount_offset", sc.mount_offset_m);
-  ros_params::optional(pnh, "scanner/min_range", sc.min_range_m);
-  ros_params::optional(pnh, "scanner/max_range", sc.max_range_m);
-  ros_params::optional(pnh, "scanner/plane_time", sc.plane_time_s);
-  ros_params::optional(pnh, "scanner/mixed_pixels", sc.mixed_pixels);
-  ros_params::optional(pnh, "scanner/beam_divergence", sc.beam_divergence_rad);
-  ros_params::optional(pnh, "scanner/mixed_pixel_threshold", sc.mixed_pixel_threshold_m);
-  ros_params::optional(pnh, "scanner/mixed_pixel_samples", sc.mixed_pixel_samples);
-  // The selected profile's values from config/sim.yaml (profiles/<name>/sensor|motion/...).
+  params.optional("scanner/height", sc.height_m);
+  params.optional("scanner/x_offset", sc.x_offset_m);
+  params.optional("scanner/mount_offset", sc.mount_offset_m);
+  params.optional("scanner/min_range", sc.min_range_m);
+  params.optional("scanner/max_range", sc.max_range_m);
+  params.optional("scanner/plane_time", sc.plane_time_s);
+  params.optional("scanner/mixed_pixels", sc.mixed_pixels);
+  params.optional("scanner/beam_divergence", sc.beam_divergence_rad);
+  params.optional("scanner/mixed_pixel_threshold", sc.mixed_pixel_threshold_m);
+  params.optional("scanner/mixed_pixel_samples", sc.mixed_pixel_samples);
+  // The selected profile's values from config/sim.yaml (profiles/<name>/sensor|motion/...). The
+  // other profiles there are read too (into a scratch copy): their names are checked the same way.
+  const auto read_profile = [&params](const std::string& pp, ErrorProfile& errors) {
+    SensorNoiseConfig& sn = errors.sensor;
+    params.optional(pp + "sensor/p_hit", sn.p_hit);
+    params.optional(pp + "sensor/p_random", sn.p_random);
+    params.optional(pp + "sensor/p_max", sn.p_max);
+    params.optional(pp + "sensor/sigma_near", sn.sigma_near_m);
+    params.optional(pp + "sensor/sigma_far_rel", sn.sigma_far_rel);
+    params.optional(pp + "sensor/p_plane_loss", sn.p_plane_loss);
+    MotionConfig& mo = errors.motion;
+    params.optional(pp + "motion/curvature", mo.curvature_per_m);
+    params.optional(pp + "motion/curvature_sigma", mo.curvature_sigma_per_m);
+    params.optional(pp + "motion/distance_error_rel", mo.distance_error_rel);
+    params.optional(pp + "motion/distance_sigma_rel", mo.distance_sigma_rel);
+    params.optional(pp + "motion/finish_angle", mo.finish_angle_rad);
+    params.optional(pp + "motion/finish_angle_sigma", mo.finish_angle_sigma_rad);
+    params.optional(pp + "motion/rotation_error_rel", mo.rotation_error_rel);
+    params.optional(pp + "motion/rotation_sigma_rel", mo.rotation_sigma_rel);
+    params.optional(pp + "motion/rotation_position_sigma", mo.rotation_position_sigma_m_per_rad);
+  };
   const std::string pp = "profiles/" + profile + "/";
-  SensorNoiseConfig& sn = config.errors.sensor;
-  ros_params::optional(pnh, pp + "sensor/p_hit", sn.p_hit);
-  ros_params::optional(pnh, pp + "sensor/p_random", sn.p_random);
-  ros_params::optional(pnh, pp + "sensor/p_max", sn.p_max);
-  ros_params::optional(pnh, pp + "sensor/sigma_near", sn.sigma_near_m);
-  ros_params::optional(pnh, pp + "sensor/sigma_far_rel", sn.sigma_far_rel);
-  ros_params::optional(pnh, pp + "sensor/p_plane_loss", sn.p_plane_loss);
+  XmlRpc::XmlRpcValue profiles;
+  if (pnh.getParam("profiles", profiles) && profiles.getType() == XmlRpc::XmlRpcValue::TypeStruct)
+    for (auto it = profiles.begin(); it != profiles.end(); ++it)
+      if (it->first != profile) {
+        ErrorProfile scratch;
+        read_profile("profiles/" + it->first + "/", scratch);
+      }
+  read_profile(pp, config.errors);
   MotionConfig& mo = config.errors.motion;
-  ros_params::optional(pnh, pp + "motion/curvature", mo.curvature_per_m);
-  ros_params::optional(pnh, pp + "motion/curvature_sigma", mo.curvature_sigma_per_m);
-  ros_params::optional(pnh, pp + "motion/distance_error_rel", mo.distance_error_rel);
-  ros_params::optional(pnh, pp + "motion/distance_sigma_rel", mo.distance_sigma_rel);
-  ros_params::optional(pnh, pp + "motion/finish_angle", mo.finish_angle_rad);
-  ros_params::optional(pnh, pp + "motion/finish_angle_sigma", mo.finish_angle_sigma_rad);
-  ros_params::optional(pnh, pp + "motion/rotation_error_rel", mo.rotation_error_rel);
-  ros_params::optional(pnh, pp + "motion/rotation_sigma_rel", mo.rotation_sigma_rel);
-  ros_params::optional(pnh, pp + "motion/rotation_position_sigma", mo.rotation_position_sigma_m_per_rad);
-  ros_params::optional(pnh, "motion/linear_speed", mo.linear_speed_mps);
-  ros_params::optional(pnh, "motion/angular_speed", mo.angular_speed_radps);
+  params.optional("motion/linear_speed", mo.linear_speed_mps);
+  params.optional("motion/angular_speed", mo.angular_speed_radps);
   // The body (robot_body/..., config/robot_body.yaml): the collision disc and the height up to
   // which the world's geometry blocks it. ~robot_radius overrides the disc (a WARN names both).
   const RobotBody body = ros_params::readRobotBody(nh);
   config.robot_radius_m = body.radius_m;
   world_options.obstacle_max_z_m = body.height_m;
-  if (pnh.hasParam("robot_radius")) {
-    ros_params::optional(pnh, "robot_radius", config.robot_radius_m);
+  if (params.has("robot_radius")) {
+    params.optional("robot_radius", config.robot_radius_m);
     ROS_WARN("sim_node: %s = %.3f m overrides the robot body's radius %.3f m (config/robot_body.yaml)",
              pnh.resolveName("robot_radius").c_str(), config.robot_radius_m, body.radius_m);
   }
-  ros_params::optional(pnh, "max_forward", config.max_forward_m);
-  ros_params::optional(pnh, "max_rotate", config.max_rotate_rad);
-  ros_params::optional(pnh, "outlier_filter", config.outlier_filter);
+  params.optional("max_forward", config.max_forward_m);
+  params.optional("max_rotate", config.max_rotate_rad);
+  params.optional("outlier_filter", config.outlier_filter);
   try {
     config.validate(pp);
   } catch (const ConfigError& e) {
     throw ConfigError(std::string(e.what()) + " (private namespace " + pnh.getNamespace() + ")");
   }
-  ros_params::optional(pnh, "motion_time_scale", motion_time_scale_);
+  params.optional("motion_time_scale", motion_time_scale_);
   if (!(motion_time_scale_ >= 0.0 && motion_time_scale_ <= 10.0))
     throw ConfigError("parameter '" + pnh.resolveName("motion_time_scale") + "' = " + std::to_string(motion_time_scale_) +
                       " is out of range [0, 10]");
-  ros_params::optional(pnh, "scan_time_scale", scan_time_scale_);
+  params.optional("scan_time_scale", scan_time_scale_);
   if (!(scan_time_scale_ >= 0.0 && scan_time_scale_ <= 10.0))
     throw ConfigError("parameter '" + pnh.resolveName("scan_time_scale") + "' = " + std::to_string(scan_time_scale_) +
                       " is out of range [0, 10]");
 
   std::string start_text;
-  ros_params::optional(pnh, "start_pose", start_text);
+  params.optional("start_pose", start_text);
 
-  ros_params::optional(pnh, "world_frame", world_frame_);
-  ros_params::optional(pnh, "map_frame", map_frame_);
-  ros_params::optional(pnh, "odom_frame", odom_frame_);
-  ros_params::optional(pnh, "base_frame", base_frame_);
-  ros_params::optional(pnh, "laser_frame", laser_frame_);
-  ros_params::optional(pnh, "odom_as_map", odom_as_map_);
-  ros_params::requireFrames(pnh, {{"world_frame", world_frame_}, {"map_frame", map_frame_}, {"odom_frame", odom_frame_},
+  params.optional("world_frame", world_frame_);
+  params.optional("map_frame", map_frame_);
+  params.optional("odom_frame", odom_frame_);
+  params.optional("base_frame", base_frame_);
+  params.optional("laser_frame", laser_frame_);
+  params.optional("odom_as_map", odom_as_map_);
+  params.frames({{"world_frame", world_frame_}, {"map_frame", map_frame_}, {"odom_frame", odom_frame_},
                                   {"base_frame", base_frame_}, {"laser_frame", laser_frame_}});
   nh.param("/use_sim_time", publish_clock_, false);
+  params.known({"state_file"});  // read below, once the world is loaded
+  params.rejectUnknown();        // before the world is loaded: a typo ends the node at once
 
   ROS_INFO("sim_node: loading world %s", world_path.c_str());
   // The world file first, then the start pose: the error names the right one (issue 22).
@@ -161,7 +177,7 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
              sc.mixed_pixel_samples, sc.mixed_pixel_samples, sc.mixed_pixel_threshold_m);
   // A restarted sim_node continues the simulation of the one that died (pose, odometry, clock,
   // random sequence): a real robot does not teleport back to its start when its driver restarts.
-  ros_params::optional(pnh, "state_file", state_file_);
+  params.optional("state_file", state_file_);
   if (!state_file_.empty() && std::ifstream(state_file_).good()) {
     try {
       sim_->restoreState(readFile(state_file_));

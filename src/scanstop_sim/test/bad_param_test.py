@@ -55,6 +55,14 @@ class BadParameters(unittest.TestCase):
         self.check(6, [('error_profile', 'thesis'), ('profiles/thesis/sensor/p_hit', '-1.0')],
                    "'profiles/thesis/sensor/p_hit' = -1 is out of range [0, 1]")
 
+    def test_unknown_parameter(self):
+        self.check(16, [('scanner/heigth', '0.45')], "unknown parameter '/bad_sim_node_16/scanner/heigth' (did you mean "
+                   "'scanner/height'?): nothing reads it; sim_node reads ", "scanner/max_range")
+
+    def test_misspelt_profile_value(self):
+        self.check(17, [('profiles/perfect/sensor/p_hti', '1.0')], "unknown parameter '/bad_sim_node_17/profiles/perfect/"
+                   "sensor/p_hti' (did you mean 'profiles/perfect/sensor/p_hit'?)")
+
     def test_unknown_profile(self):
         self.check(7, [('error_profile', 'noisy')], "error profile 'noisy' must be one of perfect, thesis")
 

@@ -31,11 +31,8 @@ class IcpSlamNode {
  public:
   IcpSlamNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     SlamConfig config;
-    std::vector<std::string> known;
-    const auto optional = [&](const std::string& name, auto& value) {
-      known.push_back(name);
-      ros_params::optional(pnh, name, value);
-    };
+    ros_params::ParamReader params(pnh, "icp_slam_node");
+    const auto optional = [&](const std::string& name, auto& value) { params.optional(name, value); };
     double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
     optional("master_timeout", master_timeout);
     bool end_launch = false;  // read by main() after a start-up error; a known name here
@@ -55,25 +52,16 @@ class IcpSlamNode {
     optional("odometry_prior", config.odometry_prior);
     optional("prior_sigma", config.prior_sigma_m);
     optional("prior_sigma_per_m", config.prior_sigma_per_m);
-    double prior_sigma_deg = config.prior_sigma_rad * 180.0 / M_PI;
-    optional("prior_sigma_deg", prior_sigma_deg);
-    requireInRange(pnh.resolveName("prior_sigma_deg"), prior_sigma_deg, 1e-4, 180.0, "deg");
-    config.prior_sigma_rad = prior_sigma_deg * M_PI / 180.0;
+    params.degrees("prior_sigma_deg", config.prior_sigma_rad, 1e-4, 180.0);
     optional("prior_sigma_angle_per_rad", config.prior_sigma_rad_per_rad);
     optional("prior_gate", config.prior_gate);
     optional("odometry_gate", config.odometry_gate);
     optional("odometry_gate_rms_ratio", config.odometry_gate_rms_ratio);
     optional("failure_retry_degeneracy_ratio", config.failure_retry_degeneracy_ratio);
-    double prior_sigma_deg_per_m = config.prior_sigma_rad_per_m * 180.0 / M_PI;
-    optional("prior_sigma_deg_per_m", prior_sigma_deg_per_m);
-    requireInRange(pnh.resolveName("prior_sigma_deg_per_m"), prior_sigma_deg_per_m, 0.0, 57.0, "deg/m");
-    config.prior_sigma_rad_per_m = prior_sigma_deg_per_m * M_PI / 180.0;
+    params.degrees("prior_sigma_deg_per_m", config.prior_sigma_rad_per_m, 0.0, 57.0);
     optional("c_max", config.icp.c_max_m);
     optional("t_c", config.icp.t_c_m);
-    double r_c_deg = config.icp.r_c_rad * 180.0 / M_PI;
-    optional("r_c_deg", r_c_deg);
-    requireInRange(pnh.resolveName("r_c_deg"), r_c_deg, 1e-7, 45.0, "deg");
-    config.icp.r_c_rad = r_c_deg * M_PI / 180.0;
+    params.degrees("r_c_deg", config.icp.r_c_rad, 1e-7, 45.0);
     optional("max_iterations", config.icp.max_iterations);
     optional("min_correspondences", config.icp.min_correspondences);
     optional("min_overlap", config.icp.min_overlap);
@@ -88,17 +76,11 @@ class IcpSlamNode {
     optional("coarse_c_max", config.coarse_c_max_m);
     optional("coarse_point_to_point", config.coarse_point_to_point);
     optional("refine_t_c", config.refine_t_c_m);
-    double refine_r_c_deg = config.refine_r_c_rad * 180.0 / M_PI;
-    optional("refine_r_c_deg", refine_r_c_deg);
-    requireInRange(pnh.resolveName("refine_r_c_deg"), refine_r_c_deg, 1e-7, 0.5, "deg");
-    config.refine_r_c_rad = refine_r_c_deg * M_PI / 180.0;
+    params.degrees("refine_r_c_deg", config.refine_r_c_rad, 1e-7, 0.5);
     optional("refine_max_iterations", config.refine_max_iterations);
     optional("refine_source_voxel", config.refine_source_voxel_m);
     optional("refine_max_correction", config.refine_max_correction_m);
-    double refine_max_correction_deg = config.refine_max_correction_rad * 180.0 / M_PI;
-    optional("refine_max_correction_deg", refine_max_correction_deg);
-    requireInRange(pnh.resolveName("refine_max_correction_deg"), refine_max_correction_deg, 0.0, 180.0, "deg");
-    config.refine_max_correction_rad = refine_max_correction_deg * M_PI / 180.0;
+    params.degrees("refine_max_correction_deg", config.refine_max_correction_rad, 0.0, 180.0);
     optional("same_side", config.icp.same_side);
     optional("accelerate", config.icp.accelerate);
     optional("ignore_horizontal", config.icp.ignore_horizontal);
@@ -114,10 +96,7 @@ class IcpSlamNode {
     optional("relax_min_overlap", config.relax_min_overlap);
     optional("relax_max_rms", config.relax_max_rms_m);
     optional("relax_update", config.relax_update_m);
-    double relax_update_deg = config.relax_update_rad * 180.0 / M_PI;
-    optional("relax_update_deg", relax_update_deg);
-    requireInRange(pnh.resolveName("relax_update_deg"), relax_update_deg, 0.0, 180.0, "deg");
-    config.relax_update_rad = relax_update_deg * M_PI / 180.0;
+    params.degrees("relax_update_deg", config.relax_update_rad, 0.0, 180.0);
     optional("relax_loss", config.graph.loss);
     optional("relax_loss_scale", config.graph.loss_scale);
     optional("max_cloud_points", max_cloud_points_);
@@ -131,8 +110,7 @@ class IcpSlamNode {
     optional("map_dir", map_dir);
     bool subscribe_scans = false;
     optional("subscribe_scans", subscribe_scans);
-    for (const std::string& name : ros_params::unknownParameters(pnh, known))
-      ROS_WARN("icp_slam_node: ignoring unknown parameter '%s' (a typo?)", name.c_str());
+    params.rejectUnknown();
     try {
       config.validate();
       requireInRange("max_cloud_points", max_cloud_points_, 1, 1e8);
@@ -142,15 +120,7 @@ class IcpSlamNode {
     } catch (const ConfigError& e) {
       throw ConfigError(std::string(e.what()) + " (in namespace " + pnh.getNamespace() + ")");
     }
-    for (const auto& frame : {std::make_pair("map_frame", &map_frame_), std::make_pair("odom_frame", &odom_frame_),
-                              std::make_pair("base_frame", &base_frame_)})
-      if (frame.second->empty() || frame.second->front() == '/' || frame.second->find(' ') != std::string::npos)
-        throw ConfigError("parameter '" + pnh.resolveName(frame.first) + "' = '" + *frame.second +
-                          "' must be a non-empty frame id without a leading '/' or spaces");
-    if (map_frame_ == odom_frame_ || map_frame_ == base_frame_ || odom_frame_ == base_frame_)
-      throw ConfigError("parameters '" + pnh.resolveName("map_frame") + "' = '" + map_frame_ + "', '" +
-                        pnh.resolveName("odom_frame") + "' = '" + odom_frame_ + "' and '" +
-                        pnh.resolveName("base_frame") + "' = '" + base_frame_ + "' must be three different frames");
+    params.frames({{"map_frame", map_frame_}, {"odom_frame", odom_frame_}, {"base_frame", base_frame_}});
     slam_ = std::make_unique<IcpSlam>(config, map_dir);
     for (const SkippedScan& s : slam_->skippedScans()) {
       const std::string what = s.reason.compare(0, s.file.size(), s.file) == 0 ? s.reason : s.file + ": " + s.reason;

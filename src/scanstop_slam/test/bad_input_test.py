@@ -179,10 +179,12 @@ class SlamBadInput(unittest.TestCase):
         self.check_bad_param(6, [('r_c_deg', '90')], "'/bad_slam_6/r_c_deg' = 90 deg is out of range [1e-07, 45 deg]")
         self.check_bad_param(7, [('sensor_height', '50')], "'sensor_height' = 50 m is out of range [-10, 10 m]")
         self.check_bad_param(8, [('mode', '4dof')], "'/bad_slam_8/mode' = '4dof' must be 3dof or 6dof")
-        self.check_bad_param(9, [('map_frame', 'odom')], 'must be three different frames')
+        self.check_bad_param(9, [('map_frame', 'odom')], "map_frame' and", "odom_frame' are both 'odom'")
         self.check_bad_param(10, [('base_frame', '')], "'/bad_slam_10/base_frame' = ''")
         self.check_bad_param(11, [('c_max', 'wide')], "parameter '/bad_slam_11/c_max' has the wrong type")
         self.check_bad_param(12, [('max_cloud_points', '0')], "'max_cloud_points' = 0 is out of range [1, 1e+08]")
+        self.check_bad_param(13, [('c_maxx', '0.5')], "unknown parameter '/bad_slam_13/c_maxx' (did you mean 'c_max'?): "
+                             "nothing reads it; icp_slam_node reads ", "refine_r_c_deg")
 
     def test_3_corrupt_scan_files_are_skipped_by_name(self):
         # A copy of the map directory (the launched node keeps writing its own) with four scans.

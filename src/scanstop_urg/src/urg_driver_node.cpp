@@ -13,38 +13,39 @@
 namespace scanstop {
 namespace urg {
 
-DriverConfig readDriverConfig(const ros::NodeHandle& pnh) {
+DriverConfig readDriverConfig(ros_params::ParamReader& params) {
+  const ros::NodeHandle& pnh = params.handle();
   DriverConfig c;
-  ros_params::optional(pnh, "port", c.urg_port);
-  ros_params::optional(pnh, "baud", c.urg_baud);
-  ros_params::optional(pnh, "reply_timeout", c.urg.reply_timeout_s);
-  ros_params::optional(pnh, "scan_timeout", c.urg.scan_timeout_s);
-  ros_params::optional(pnh, "platform/port", c.platform_port);
-  ros_params::optional(pnh, "platform/baud", c.platform_baud);
-  ros_params::optional(pnh, "platform/reply_timeout", c.stepper.reply_timeout_s);
-  ros_params::optional(pnh, "platform/home_timeout", c.stepper.home_timeout_s);
-  ros_params::optional(pnh, "platform/retries", c.stepper.retries);
+  params.optional("port", c.urg_port);
+  params.optional("baud", c.urg_baud);
+  params.optional("reply_timeout", c.urg.reply_timeout_s);
+  params.optional("scan_timeout", c.urg.scan_timeout_s);
+  params.optional("platform/port", c.platform_port);
+  params.optional("platform/baud", c.platform_baud);
+  params.optional("platform/reply_timeout", c.stepper.reply_timeout_s);
+  params.optional("platform/home_timeout", c.stepper.home_timeout_s);
+  params.optional("platform/retries", c.stepper.retries);
   std::string platform_type = "stepper";
-  ros_params::optional(pnh, "platform/type", platform_type);
+  params.optional("platform/type", platform_type);
   if (platform_type != "stepper")
     throw ConfigError("parameter '" + pnh.resolveName("platform/type") + "' = '" + platform_type +
                       "': only 'stepper' is implemented");
   ScanGeometry& g = c.scanner.geometry;
-  ros_params::optional(pnh, "scanner/height", g.height_m);
-  ros_params::optional(pnh, "scanner/x_offset", g.x_offset_m);
-  ros_params::optional(pnh, "scanner/mount_offset", g.mount_offset_m);
-  ros_params::optional(pnh, "scanner/first_step", g.first_step);
-  ros_params::optional(pnh, "scanner/last_step", g.last_step);
-  ros_params::optional(pnh, "scanner/min_range", g.min_range_m);
-  ros_params::optional(pnh, "scanner/max_range", g.max_range_m);
+  params.optional("scanner/height", g.height_m);
+  params.optional("scanner/x_offset", g.x_offset_m);
+  params.optional("scanner/mount_offset", g.mount_offset_m);
+  params.optional("scanner/first_step", g.first_step);
+  params.optional("scanner/last_step", g.last_step);
+  params.optional("scanner/min_range", g.min_range_m);
+  params.optional("scanner/max_range", g.max_range_m);
   c.urg.first_step = g.first_step;
   c.urg.last_step = g.last_step;
-  ros_params::optional(pnh, "max_plane_retries", c.scanner.max_plane_retries);
-  ros_params::optional(pnh, "max_consecutive_dropped", c.scanner.max_consecutive_dropped);
-  ros_params::optional(pnh, "settle_time", c.scanner.settle_time_s);
-  ros_params::optional(pnh, "outlier_filter", c.scanner.outlier_filter);
-  ros_params::optional(pnh, "outlier_tolerance_abs", c.scanner.filter.tolerance_abs_m);
-  ros_params::optional(pnh, "outlier_tolerance_rel", c.scanner.filter.tolerance_rel);
+  params.optional("max_plane_retries", c.scanner.max_plane_retries);
+  params.optional("max_consecutive_dropped", c.scanner.max_consecutive_dropped);
+  params.optional("settle_time", c.scanner.settle_time_s);
+  params.optional("outlier_filter", c.scanner.outlier_filter);
+  params.optional("outlier_tolerance_abs", c.scanner.filter.tolerance_abs_m);
+  params.optional("outlier_tolerance_rel", c.scanner.filter.tolerance_rel);
   try {
     c.validate();
   } catch (const ConfigError& e) {
@@ -53,38 +54,48 @@ DriverConfig readDriverConfig(const ros::NodeHandle& pnh) {
   return c;
 }
 
-StandstillConfig readStandstillConfig(const ros::NodeHandle& pnh) {
+StandstillConfig readStandstillConfig(ros_params::ParamReader& params) {
+  const ros::NodeHandle& pnh = params.handle();
   StandstillConfig c;
-  ros_params::optional(pnh, "standstill/max_linear_speed", c.max_linear_speed_mps);
-  ros_params::optional(pnh, "standstill/max_angular_speed", c.max_angular_speed_radps);
+  params.optional("standstill/max_linear_speed", c.max_linear_speed_mps);
+  params.optional("standstill/max_angular_speed", c.max_angular_speed_radps);
   try {
     c.validate();
   } catch (const ConfigError& e) {
     throw ConfigError(std::string("parameters of ") + pnh.getNamespace() + ": " + e.what());
   }
   return c;
+}
+
+NodeParameters readNodeParameters(ros_params::ParamReader& params) {
+  NodeParameters n;
+  params.known({"master_timeout"});  // main()'s master watchdog
+  params.optional("odom_topic", n.odom_topic);
+  if (n.odom_topic.empty())
+    throw ConfigError("parameter '" + params.resolve("odom_topic") + "' is empty: give the base's odometry topic");
+  params.optional("reconnect_interval", n.reconnect_interval_s, 0.05, 600.0, "s");
+  params.optional("diagnostic_period", n.diagnostic_period_s, 0.05, 600.0, "s");
+  params.optional("odom_timeout", n.odom_timeout_s, 0.0, 60.0, "s");
+  params.optional("require_odom", n.require_odom);
+  params.optional("base_frame", n.base_frame);
+  params.optional("laser_frame", n.laser_frame);
+  params.optional("odom_frame", n.odom_frame);
+  params.frames({{"base_frame", n.base_frame}, {"laser_frame", n.laser_frame}, {"odom_frame", n.odom_frame}});
+  return n;
 }
 
 UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
     : tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
-  const DriverConfig config = readDriverConfig(pnh);
-  standstill_ = readStandstillConfig(pnh);
-  std::string odom_topic = "odom";
-  ros_params::optional(pnh, "odom_topic", odom_topic);
-  if (odom_topic.empty())
-    throw ConfigError("parameter '" + pnh.resolveName("odom_topic") + "' is empty: give the base's odometry topic");
-  double reconnect_interval = 1.0, diagnostic_period = 1.0;
-  ros_params::optional(pnh, "reconnect_interval", reconnect_interval);
-  ros_params::optional(pnh, "diagnostic_period", diagnostic_period);
-  ros_params::optional(pnh, "odom_timeout", odom_timeout_s_);
-  ros_params::optional(pnh, "require_odom", require_odom_);
-  ros_params::optional(pnh, "base_frame", base_frame_);
-  ros_params::optional(pnh, "laser_frame", laser_frame_);
-  ros_params::optional(pnh, "odom_frame", odom_frame_);
-  requireInRange(pnh.resolveName("reconnect_interval"), reconnect_interval, 0.05, 600.0, "s");
-  requireInRange(pnh.resolveName("diagnostic_period"), diagnostic_period, 0.05, 600.0, "s");
-  requireInRange(pnh.resolveName("odom_timeout"), odom_timeout_s_, 0.0, 60.0, "s");
-  ros_params::requireFrames(pnh, {{"base_frame", base_frame_}, {"laser_frame", laser_frame_}, {"odom_frame", odom_frame_}});
+  ros_params::ParamReader params(pnh, "rotating_urg_driver");
+  const DriverConfig config = readDriverConfig(params);
+  standstill_ = readStandstillConfig(params);
+  const NodeParameters node = readNodeParameters(params);
+  params.rejectUnknown();
+  odom_timeout_s_ = node.odom_timeout_s;
+  require_odom_ = node.require_odom;
+  base_frame_ = node.base_frame;
+  laser_frame_ = node.laser_frame;
+  odom_frame_ = node.odom_frame;
   driver_ = std::make_unique<UrgDriver>(config);
 
   Eigen::Isometry3d T_base_laser = Eigen::Isometry3d::Identity();
@@ -96,10 +107,10 @@ UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
 
   scan_pub_ = nh.advertise<sensor_msgs::PointCloud2>("scanner/last_scan", 1, true);
   progress_pub_ = nh.advertise<scanstop_msgs::Progress>("scanner/progress", 10);
-  odom_sub_ = nh.subscribe(odom_topic, 20, &UrgDriverNode::onOdom, this);
+  odom_sub_ = nh.subscribe(node.odom_topic, 20, &UrgDriverNode::onOdom, this);
   take_scan_srv_ = nh.advertiseService("scanner/take_scan", &UrgDriverNode::onTakeScan, this);
-  reconnect_timer_ = nh.createWallTimer(ros::WallDuration(reconnect_interval), &UrgDriverNode::onReconnectTimer, this);
-  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(diagnostic_period), &UrgDriverNode::onDiagnosticsTimer, this);
+  reconnect_timer_ = nh.createWallTimer(ros::WallDuration(node.reconnect_interval_s), &UrgDriverNode::onReconnectTimer, this);
+  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(node.diagnostic_period_s), &UrgDriverNode::onDiagnosticsTimer, this);
   ROS_INFO("rotating_urg_driver: URG on %s, platform on %s; connecting", config.urg_port.c_str(),
            config.platform_port.c_str());
 }

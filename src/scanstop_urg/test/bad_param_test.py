@@ -56,6 +56,10 @@ class BadParameters(unittest.TestCase):
     def test_plane_retries(self):
         self.check(9, [('max_plane_retries', '50')], "max_plane_retries = 50 must be in 0..20")
 
+    def test_unknown_parameter(self):
+        self.check(11, [('scanner/heigth', '0.45')], "unknown parameter '/bad_urg_11/scanner/heigth' (did you mean "
+                   "'scanner/height'?): nothing reads it; rotating_urg_driver reads ", "scanner/max_range")
+
     def test_wrong_type(self):
         self.check(10, [('scanner/height', 'high')], "parameter '/bad_urg_10/scanner/height' has the wrong type")
 

@@ -250,7 +250,8 @@ TEST(RotatingUrgDriver, LaserFaultIsReportedUntilRepaired) {
 
 TEST(RotatingUrgDriver, ShippedConfigEqualsTheDefaultsAndBadValuesAreNamed) {
   // config/urg.yaml, loaded unmodified into /urg_yaml by the launch file.
-  const scanstop::urg::DriverConfig c = scanstop::urg::readDriverConfig(ros::NodeHandle("/urg_yaml"));
+  scanstop::ros_params::ParamReader params(ros::NodeHandle("/urg_yaml"), "rotating_urg_driver");
+  const scanstop::urg::DriverConfig c = scanstop::urg::readDriverConfig(params);
   const scanstop::urg::DriverConfig d;
   EXPECT_EQ(c.urg_port, d.urg_port);
   EXPECT_EQ(c.urg_baud, d.urg_baud);
@@ -275,20 +276,31 @@ TEST(RotatingUrgDriver, ShippedConfigEqualsTheDefaultsAndBadValuesAreNamed) {
   EXPECT_EQ(c.scanner.outlier_filter, d.scanner.outlier_filter);
   EXPECT_EQ(c.scanner.filter.tolerance_abs_m, d.scanner.filter.tolerance_abs_m);
   EXPECT_EQ(c.scanner.filter.tolerance_rel, d.scanner.filter.tolerance_rel);
-  const scanstop::urg::StandstillConfig st = scanstop::urg::readStandstillConfig(ros::NodeHandle("/urg_yaml")), dst;
+  const scanstop::urg::StandstillConfig st = scanstop::urg::readStandstillConfig(params), dst;
   EXPECT_EQ(st.max_linear_speed_mps, dst.max_linear_speed_mps);
   EXPECT_EQ(st.max_angular_speed_radps, dst.max_angular_speed_radps);
+  const scanstop::urg::NodeParameters n = scanstop::urg::readNodeParameters(params), dn;
+  EXPECT_EQ(n.odom_topic, dn.odom_topic);
+  EXPECT_EQ(n.reconnect_interval_s, dn.reconnect_interval_s);
+  EXPECT_EQ(n.diagnostic_period_s, dn.diagnostic_period_s);
+  EXPECT_EQ(n.odom_timeout_s, dn.odom_timeout_s);
+  EXPECT_EQ(n.require_odom, dn.require_odom);
+  EXPECT_EQ(n.base_frame + n.laser_frame + n.odom_frame, dn.base_frame + dn.laser_frame + dn.odom_frame);
+  // Every key of config/urg.yaml is one the node reads.
+  EXPECT_TRUE(params.unknown().empty()) << params.unknown().front();
   ros::NodeHandle bad("/urg_bad");
   bad.setParam("scanner/height", 7.0);
   try {
-    scanstop::urg::readDriverConfig(bad);
+    scanstop::ros_params::ParamReader bad_params(bad, "rotating_urg_driver");
+    scanstop::urg::readDriverConfig(bad_params);
     ADD_FAILURE() << "accepted scanner/height = 7";
   } catch (const scanstop::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("scanner/height"), std::string::npos) << e.what();
   }
   bad.setParam("scanner/height", "high");
   try {
-    scanstop::urg::readDriverConfig(bad);
+    scanstop::ros_params::ParamReader bad_params(bad, "rotating_urg_driver");
+    scanstop::urg::readDriverConfig(bad_params);
     ADD_FAILURE() << "accepted a string height";
   } catch (const scanstop::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("/urg_bad/scanner/height"), std::string::npos) << e.what();

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "scanstop_common/ros/params.h"
 #include "scanstop_pioneer/pioneer_driver.h"
 
 namespace scanstop {
@@ -25,10 +26,14 @@ class PioneerDriverNode {
   PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
   ~PioneerDriverNode();
 
-  /// Fills a DriverConfig from the private parameters (defaults = the struct's defaults).
-  static DriverConfig readParameters(const ros::NodeHandle& pnh);
-  /// Private parameters set on the server that the node does not know (typos in a config file).
-  static std::vector<std::string> unknownParameters(const ros::NodeHandle& pnh);
+  /// Every private parameter of the node (defaults = the structs' defaults), validated (ConfigError
+  /// naming the parameter); params.unknown() then lists what nothing read.
+  struct Parameters {
+    DriverConfig driver;
+    std::string odom_frame = "odom", base_frame = "base_link";
+    bool publish_tf = true;
+  };
+  static Parameters readParameters(ros_params::ParamReader& params);
   /// The master watchdog's handlers: stop the robot and refuse motions while the ROS master is gone
   /// (nobody supervises the robot), accept them again when it is back.
   void onMasterLost(const std::string& why);

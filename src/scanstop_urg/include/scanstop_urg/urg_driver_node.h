@@ -15,6 +15,7 @@
 #include <mutex>
 #include <string>
 
+#include "scanstop_common/ros/params.h"
 #include "scanstop_urg/driver.h"
 #include "scanstop_urg/standstill.h"
 
@@ -23,9 +24,17 @@ namespace urg {
 
 /// Reads every parameter of the node (see README) into a DriverConfig; throws ConfigError naming
 /// the parameter that is wrong.
-DriverConfig readDriverConfig(const ros::NodeHandle& pnh);
+DriverConfig readDriverConfig(ros_params::ParamReader& params);
 /// Reads standstill/max_linear_speed and standstill/max_angular_speed; throws ConfigError.
-StandstillConfig readStandstillConfig(const ros::NodeHandle& pnh);
+StandstillConfig readStandstillConfig(ros_params::ParamReader& params);
+/// The node's own parameters (topics, timers, frames; see README); throws ConfigError.
+struct NodeParameters {
+  std::string odom_topic = "odom";
+  double reconnect_interval_s = 1.0, diagnostic_period_s = 1.0, odom_timeout_s = 0.5;
+  bool require_odom = true;
+  std::string base_frame = "base_link", laser_frame = "laser", odom_frame = "odom";
+};
+NodeParameters readNodeParameters(ros_params::ParamReader& params);
 
 class UrgDriverNode {
  public:

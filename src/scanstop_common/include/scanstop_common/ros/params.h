@@ -64,5 +64,65 @@ inline void requireFrames(const ros::NodeHandle& nh, const std::vector<std::pair
   }
 }
 
+/// One reader of a node's private parameters, the same in every node: it reads with the checks of
+/// require()/optional(), records every name it was asked for, converts a parameter in degrees
+/// (its name says so: `_deg`) to radians, checks frame ids, and at the end refuses any parameter set in
+/// the node's namespace that nothing read (rejectUnknown(): an error that names it, the closest known
+/// name, and every known one). Names are relative to the node handle (usually "~").
+class ParamReader {
+ public:
+  /// `node`: the node's name in messages ("icp_slam_node").
+  ParamReader(const ros::NodeHandle& pnh, std::string node) : nh_(pnh), node_(std::move(node)) {}
+
+  template <typename T>
+  T require(const std::string& name) {
+    known_.push_back(name);
+    return ros_params::require<T>(nh_, name);
+  }
+  /// Keeps `value` (the documented default) when unset; returns whether it was set.
+  template <typename T>
+  bool optional(const std::string& name, T& value) {
+    known_.push_back(name);
+    if (!nh_.hasParam(name)) return false;
+    ros_params::optional(nh_, name, value);
+    return true;
+  }
+  /// optional() of a number that must lie in [lo, hi] (unit for the message).
+  void optional(const std::string& name, double& value, double lo, double hi, const std::string& unit = "");
+  void optional(const std::string& name, int& value, int lo, int hi);
+  /// A parameter in degrees (the name contains "_deg"): `radians` holds the default in radians and
+  /// receives the value in radians; [lo_deg, hi_deg] is checked in degrees.
+  void degrees(const std::string& name, double& radians, double lo_deg, double hi_deg);
+  /// Whether the parameter is set (the name counts as known).
+  bool has(const std::string& name) {
+    known_.push_back(name);
+    return nh_.hasParam(name);
+  }
+  /// Names read by other code (main(), another reader on the same namespace): known, not read here.
+  /// A name covers the parameters below it ("robot_body" covers "robot_body/radius").
+  void known(const std::vector<std::string>& names) { known_.insert(known_.end(), names.begin(), names.end()); }
+  /// Frame ids (name, value) already read: each non-empty, no leading '/' or space, all different.
+  void frames(const std::vector<std::pair<std::string, std::string>>& frames) const { requireFrames(nh_, frames); }
+  /// Parameters set in the namespace that no call above asked for (full names, sorted).
+  std::vector<std::string> unknown() const { return unknownParameters(nh_, known_); }
+  /// Throws ConfigError "unknown parameter(s) /ns/k_r (did you mean 'k_r_m'?); explorer_node reads a, b, ..."
+  void rejectUnknown() const;
+  /// The full name of a parameter, for messages.
+  std::string resolve(const std::string& name) const { return nh_.resolveName(name); }
+  const ros::NodeHandle& handle() const { return nh_; }
+  const std::string& node() const { return node_; }
+  /// Every name asked for so far, in order.
+  const std::vector<std::string>& names() const { return known_; }
+
+ private:
+  ros::NodeHandle nh_;
+  std::string node_;
+  std::vector<std::string> known_;
+};
+
+/// The known name closest to `name` by edit distance, or "" when none is close (at most a third of
+/// the name's letters differ). For "did you mean" hints.
+std::string closestName(const std::string& name, const std::vector<std::string>& known);
+
 }  // namespace ros_params
 }  // namespace scanstop
