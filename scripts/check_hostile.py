@@ -179,7 +179,7 @@ def cases(fx):
     missing_dir = os.path.join(t, "no_such_dir")
     C = []
     plan_step = tool("scanstop_explorer", "plan_step")
-    floor_cov = tool("scanstop_explorer", "floor_coverage")
+    floor_cov = tool("scanstop_eval", "floor_coverage")
     bpa_mesh = tool("scanstop_mesher", "bpa_mesh")
     fuse_map = tool("scanstop_mesher", "fuse_map")
     icp_reg = tool("scanstop_slam", "icp_register")

@@ -11,7 +11,7 @@
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
 #include "scanstop_eval/surface_elements.h"
-#include "scanstop_explorer/ground_truth.h"
+#include "scanstop_eval/ground_truth.h"
 
 namespace scanstop {
 namespace eval {
@@ -23,7 +23,7 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// The centre cell nearest to (x, y) within the square of half-width half_m about it, if any.
-std::optional<Eigen::Vector2d> nearestCentre(const explorer::ReachableFloor& floor, double x, double y, double half_m) {
+std::optional<Eigen::Vector2d> nearestCentre(const ReachableFloor& floor, double x, double y, double half_m) {
   const explorer::GridGeometry& g = floor.geometry;
   const cv::Point c = g.cellOf(x, y);
   if (g.contains(c) && floor.centres.at<uint8_t>(c)) return Eigen::Vector2d(x, y);
@@ -45,7 +45,7 @@ std::optional<Eigen::Vector2d> nearestCentre(const explorer::ReachableFloor& flo
 /// One candidate per square of a lattice through the start (spacing grid_m) that holds a place for
 /// the disc's centre: the lattice point itself, or the centre cell nearest to it in its square (so
 /// that a passage whose centres are narrower than the lattice gets candidates too).
-std::vector<Eigen::Vector2d> latticeOnCentres(const explorer::ReachableFloor& floor, const Pose2D& start, double grid_m) {
+std::vector<Eigen::Vector2d> latticeOnCentres(const ReachableFloor& floor, const Pose2D& start, double grid_m) {
   const explorer::GridGeometry& g = floor.geometry;
   const double x0 = g.origin_x, y0 = g.origin_y, x1 = x0 + g.width * g.resolution, y1 = y0 + g.height * g.resolution;
   const long i0 = -static_cast<long>(std::floor((start.x - x0) / grid_m)), i1 = static_cast<long>((x1 - start.x) / grid_m);
@@ -61,7 +61,7 @@ std::vector<Eigen::Vector2d> latticeOnCentres(const explorer::ReachableFloor& fl
 /// raster cells of the true reachable floor is a reachable floor cell when one of them is reachable.
 class FloorCells {
  public:
-  FloorCells(const explorer::ReachableFloor& floor, int k) : g_(floor.geometry) {
+  FloorCells(const ReachableFloor& floor, int k) : g_(floor.geometry) {
     g_.resolution *= k;
     g_.width = (g_.width + k - 1) / k;
     g_.height = (g_.height + k - 1) / k;
@@ -192,12 +192,12 @@ CoverResult coverOf(const std::vector<ElementSet>& sets, size_t universe, size_t
 /// candidate lattice.
 struct Scene {
   Scene(const TriangleMesh& mesh, const Pose2D& start, const OracleConfig& config)
-      : truth(explorer::reachableFloor(mesh, start, config.robot_radius_m, config.raster_m, config.z_lo_m,
+      : truth(reachableFloor(mesh, start, config.robot_radius_m, config.raster_m, config.z_lo_m,
                                        config.z_hi_m)),
         floor(truth, config.cellsPerFloorCell()),
         surface(mesh, config.surface_cell_m, config.z_lo_m),
         lattice(latticeOnCentres(truth, start, config.grid_m)) {}
-  explorer::ReachableFloor truth;
+  ReachableFloor truth;
   FloorCells floor;
   SurfaceElements surface;
   std::vector<Eigen::Vector2d> lattice;

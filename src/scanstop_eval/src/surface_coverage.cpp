@@ -57,5 +57,21 @@ MapSurfaceCoverage mapSurfaceCoverage(const VisibleSurface& visible, const MapDi
   return out;
 }
 
+RunSurfaceCoverage surfaceCoverageOfRun(const TriangleMesh& world, const std::string& world_name, const Pose2D& start,
+                                        const MapDirectory& map, double robot_radius_m, int planes) {
+  sim::SimConfig sim_config;
+  sim_config.errors = sim::makeProfile("perfect");
+  sim::Simulator sim(sim::World::fromMesh(world, world_name), sim_config, start);
+  OracleConfig oracle;
+  oracle.planes = planes;
+  oracle.robot_radius_m = robot_radius_m;
+  const VisibleSurface visible = visibleSurface(sim, start, oracle);
+  RunSurfaceCoverage out;
+  out.held = mapSurfaceCoverage(visible, map, start, oracle.surface_tolerance_m);
+  out.candidates = visible.candidates;
+  out.seconds = visible.seconds;
+  return out;
+}
+
 }  // namespace eval
 }  // namespace scanstop

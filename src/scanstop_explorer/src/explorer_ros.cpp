@@ -156,6 +156,13 @@ std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, cons
 ExplorerNode::ExplorerNode(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh) {
   ExplorerConfig config;
   readParameters(pnh, config, node_config_);
+  // The configuration of this run as a file (run_dir/config.yaml): what plan_step --config and the
+  // evaluation (mission_node's true coverage, floor_coverage --config) rebuild the floor map with.
+  if (!node_config_.run_dir.empty())
+    writeFileAtomic(node_config_.run_dir + "/config.yaml",
+                    parameterFileText(config, "explorer_node " + pnh.getNamespace() +
+                                                  ": the parameters of this run, the robot body applied\n"
+                                                  "(plan_step --config and floor_coverage --config read this file)"));
   explorer_ = std::make_unique<Explorer>(config);
   loadMapDir();
   // Number the steps on from what an earlier run left in run_dir (a restarted node loses nothing).

@@ -2,7 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <iomanip>
 #include <set>
+#include <sstream>
 #include <type_traits>
 
 #include "scanstop_common/config.h"
@@ -89,6 +91,28 @@ void readParameterFile(const std::string& path, ExplorerConfig& c) {
   } catch (const ConfigError& e) {
     throw ConfigError(path + ": " + e.what());
   }
+}
+
+namespace {
+std::string yamlValue(bool v) { return v ? "true" : "false"; }
+std::string yamlValue(int v) { return std::to_string(v); }
+std::string yamlValue(double v) {
+  std::ostringstream out;
+  out << std::setprecision(17) << v;
+  return out.str();
+}
+std::string yamlValue(const std::string& v) { return "\"" + v + "\""; }
+}  // namespace
+
+std::string parameterFileText(const ExplorerConfig& c, const std::string& comment) {
+  std::ostringstream out;
+  std::istringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
+  ExplorerConfig copy = c;
+  forEachParameter(copy, [&](const char* name, auto& value) { out << name << ": " << yamlValue(value) << "\n"; });
+  out << "robot_radius_m: " << yamlValue(c.planner.robot_radius_m) << "\n";
+  out << "robot_height_m: " << yamlValue(c.floor.robot_height_m) << "\n";
+  return out.str();
 }
 
 }  // namespace explorer

@@ -93,3 +93,29 @@ TEST(ExplorerParameters, BadFilesAreNamedWithTheParameter) {
   std::remove(path.c_str());
   EXPECT_DOUBLE_EQ(c.planner.robot_radius_m, 0.5);
 }
+
+// explorer_node writes its configuration into its run directory (config.yaml): read back, it is the
+// same configuration, body-derived radius and height included, also when they differ from the body.
+TEST(ExplorerParameters, TheRunsConfigurationFileReadsBackToTheSameConfiguration) {
+  ExplorerConfig c;
+  c.planner.k_r_m = 2.5;
+  c.planner.knowledge_model = "visibility";
+  c.planner.ignore_wall_base_frontier = !c.planner.ignore_wall_base_frontier;
+  c.floor.resolution_m = 0.1;
+  c.floor.min_obstacle_scans = 3;
+  c.known_free_radius_m = 1.0 / 3.0;  // all 17 digits survive
+  c.planner.robot_radius_m = 0.41;
+  c.floor.robot_height_m = 0.77;
+  const std::string text = parameterFileText(c, "a comment\nof two lines");
+  EXPECT_EQ(text.rfind("# a comment\n# of two lines\n", 0), 0u) << text;
+  const std::string path = tempFile(text);
+  ExplorerConfig back;
+  ASSERT_NO_THROW(readParameterFile(path, back)) << text;
+  std::remove(path.c_str());
+  EXPECT_EQ(parameterFileText(back), parameterFileText(c));
+  EXPECT_EQ(back.known_free_radius_m, c.known_free_radius_m);
+  EXPECT_EQ(back.planner.robot_radius_m, 0.41);
+  EXPECT_EQ(back.floor.robot_height_m, 0.77);
+  EXPECT_EQ(back.planner.knowledge_model, "visibility");
+  EXPECT_EQ(back.floor.min_obstacle_scans, 3);
+}

@@ -15,8 +15,7 @@
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
 #include "scanstop_eval/surface_coverage.h"
-#include "scanstop_explorer/explorer_ros.h"
-#include "scanstop_explorer/ground_truth.h"
+#include "scanstop_eval/ground_truth.h"
 #include "scanstop_common/ros/launch_control.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
@@ -136,7 +135,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   params.optional("map_frame", map_frame_);
   robot_radius_given_ = params.has("robot_radius");
   params.optional("robot_radius", robot_radius_m_);
-  params.optional("explorer_ns", explorer_ns_);
+  explorer_config_ = config_.run_dir + "/explorer/config.yaml";
+  params.optional("explorer_config", explorer_config_);
   params.optional("surface_planes", surface_planes_);
   if (surface_planes_ < 0 || surface_planes_ > 2000)
     throw ConfigError("parameter '" + pnh.resolveName("surface_planes") + "' = " + std::to_string(surface_planes_) +
@@ -273,23 +273,17 @@ std::optional<TrueCoverage> MissionNode::trueCoverage() {
              world_frame_.c_str(), map_frame_.c_str());
     return std::nullopt;
   }
-  // The floor map as the explorer of this run built it: its parameters (config/explorer.yaml as
-  // loaded into its namespace), defaults where it has none.
-  explorer::ExplorerConfig explorer_config;
-  try {
-    explorer::NodeConfig unused;
-    explorer::readParameters(ros::NodeHandle(nh_, explorer_ns_), explorer_config, unused);
-  } catch (const std::exception& e) {
-    ROS_WARN("mission: the explorer's parameters in '%s' are not usable (%s); true coverage with its defaults",
-             explorer_ns_.c_str(), e.what());
-    explorer_config = explorer::ExplorerConfig();
-  }
-  const double robot_radius = robot_radius_given_ ? robot_radius_m_ : explorer_config.planner.robot_radius_m;
+  // The floor map as the explorer of this run built it: with the configuration explorer_node wrote
+  // into its run directory (explorer_config), the robot radius from there unless ~robot_radius is set.
   try {
     const TriangleMesh world = readStl(world_file_);
     const MapDirectory map(map_dir_);
-    const explorer::GroundTruthCoverage c =
-        explorer::groundTruthCoverageOfMap(world, *start, map, robot_radius, 0.1, nullptr, explorer_config);
+    std::string note;
+    const eval::GroundTruthCoverage c = eval::groundTruthCoverageOfRun(
+        world, *start, map, explorer_config_,
+        robot_radius_given_ ? std::optional<double>(robot_radius_m_) : std::nullopt, &note);
+    if (!note.empty()) ROS_WARN("mission: true coverage: %s", note.c_str());
+    const double robot_radius = c.robot_radius_m;
     TrueCoverage truth{c.coverage, c.reachable_m2, std::nullopt, 0};
     if (surface_planes_ > 0) surfaceCoverage(world, *start, map, robot_radius, truth);
     return truth;
@@ -304,19 +298,14 @@ void MissionNode::surfaceCoverage(const TriangleMesh& world, const Pose2D& start
   // The surface visible from the truly reachable floor: the coverage oracle's candidate scans
   // (perfect, surface_planes planes, every 0.5 m), then the map's points within 3 cm of it.
   try {
-    sim::SimConfig sim_config;
-    sim_config.errors = sim::makeProfile("perfect");
-    sim::Simulator sim(sim::World::fromMesh(world, fileStem(world_file_)), sim_config, start);
-    eval::OracleConfig oracle;
-    oracle.planes = surface_planes_;
-    oracle.robot_radius_m = robot_radius;
-    const eval::VisibleSurface visible = eval::visibleSurface(sim, start, oracle);
-    const eval::MapSurfaceCoverage held = eval::mapSurfaceCoverage(visible, map, start, oracle.surface_tolerance_m);
+    const eval::RunSurfaceCoverage run =
+        eval::surfaceCoverageOfRun(world, fileStem(world_file_), start, map, robot_radius, surface_planes_);
+    const eval::MapSurfaceCoverage& held = run.held;
     truth.surface_coverage = held.share;
     truth.surface_visible = held.visible;
     ROS_INFO("mission: the map holds %.1f %% of the %zu surface elements visible from the reachable floor "
              "(%zu candidate scans of %d planes, %.1f s)",
-             held.share * 100.0, held.visible, visible.candidates, surface_planes_, visible.seconds);
+             held.share * 100.0, held.visible, run.candidates, surface_planes_, run.seconds);
   } catch (const std::exception& e) {
     ROS_WARN("mission: no surface coverage (%s: %s)", world_file_.c_str(), e.what());
   }

@@ -16,6 +16,7 @@
 
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
+#include "scanstop_eval/truth_file.h"
 
 namespace scanstop {
 namespace mission {
@@ -117,27 +118,25 @@ Summary summarize(const MissionState& st) {
   s.min_clearance_m = st.min_clearance_m;
   s.clearance_legs = st.clearance_legs;
   s.close_legs = st.close_legs;
-  double sum2 = 0.0, yaw2 = 0.0, odom2 = 0.0;
+  // The pose error of every scan (ATE) and odometry's: scanstop_eval's, as icp_replay's.
+  std::vector<Pose2D> slam_poses, odom_poses;
+  std::vector<std::optional<Pose2D>> truth;
   for (const ScanRecord& r : st.scans) {
-    if (!r.true_pose) continue;
-    const double e = std::hypot(r.map_pose.x - r.true_pose->x, r.map_pose.y - r.true_pose->y);
-    const double ey = yawErrorDeg(r.map_pose, *r.true_pose);
-    const double eo = std::hypot(r.odom_pose.x - r.true_pose->x, r.odom_pose.y - r.true_pose->y);
-    ++s.ate_scans;
-    sum2 += e * e;
-    yaw2 += ey * ey;
-    odom2 += eo * eo;
-    if (e > s.ate_max_m || s.ate_max_scan < 0) {
-      s.ate_max_m = e;
-      s.ate_max_scan = r.index;
-    }
-    s.ate_yaw_max_deg = std::max(s.ate_yaw_max_deg, ey);
-    s.odom_ate_max_m = std::max(s.odom_ate_max_m, eo);
+    slam_poses.push_back(r.map_pose);
+    odom_poses.push_back(r.odom_pose);
+    truth.push_back(r.true_pose);
   }
+  const eval::TrajectoryError slam_error = eval::trajectoryError(slam_poses, truth);
+  const eval::TrajectoryError odom_error = eval::trajectoryError(odom_poses, truth);
+  s.ate_scans = slam_error.scans;
   if (s.ate_scans > 0) {
-    s.ate_rms_m = std::sqrt(sum2 / s.ate_scans);
-    s.ate_yaw_rms_deg = std::sqrt(yaw2 / s.ate_scans);
-    s.odom_ate_rms_m = std::sqrt(odom2 / s.ate_scans);
+    s.ate_rms_m = slam_error.rms_m;
+    s.ate_max_m = slam_error.max_m;
+    s.ate_max_scan = st.scans[slam_error.max_at].index;
+    s.ate_yaw_rms_deg = slam_error.yaw_rms_deg;
+    s.ate_yaw_max_deg = slam_error.yaw_max_deg;
+    s.odom_ate_rms_m = odom_error.rms_m;
+    s.odom_ate_max_m = odom_error.max_m;
   }
   if (!st.scans.empty()) {
     s.compute_per_cycle_mean_s = compute_sum / st.scans.size();

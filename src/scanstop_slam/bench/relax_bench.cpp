@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "truth_file.h"  // eval/: ground truth, not SLAM
+#include "scanstop_eval/truth_file.h"  // eval/: ground truth, not SLAM
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_check.h"
 #include "scanstop_common/options.h"
@@ -99,7 +99,7 @@ std::vector<Pose2D> lumPoses(const pcl::registration::LUM<pcl::PointXYZ>& lum, s
 
 void printError(const char* what, const std::vector<Pose2D>& poses, const std::vector<std::optional<Pose2D>>& truth,
                 double time_s) {
-  const slam_eval::TrajectoryError e = slam_eval::trajectoryError(poses, truth);
+  const eval::TrajectoryError e = eval::trajectoryError(poses, truth);
   std::printf("  %-34s ATE RMS %6.2f cm  max %6.2f cm (scan %3zu)  yaw RMS %5.3f deg max %5.3f deg", what,
               e.rms_m * 100, e.max_m * 100, e.max_at, e.yaw_rms_deg, e.yaw_max_deg);
   if (time_s >= 0) std::printf("  %8.3f s", time_s);
@@ -112,12 +112,12 @@ void printError(const char* what, const std::vector<Pose2D>& poses, const std::v
 void printEdgeErrors(const std::vector<slam::PoseGraphEdge>& edges, const std::vector<std::optional<Pose2D>>& truth) {
   struct Row {
     const slam::PoseGraphEdge* e;
-    slam_eval::MeasurementError m;
+    eval::MeasurementError m;
   };
   std::vector<Row> rows;
   for (const auto& e : edges)
     if (e.from < truth.size() && e.to < truth.size() && truth[e.from] && truth[e.to])
-      rows.push_back({&e, slam_eval::measurementError(*truth[e.from], *truth[e.to], e.T_from_to, e.information)});
+      rows.push_back({&e, eval::measurementError(*truth[e.from], *truth[e.to], e.T_from_to, e.information)});
   const auto pct = [](std::vector<double> v, double q) {
     if (v.empty()) return 0.0;
     std::sort(v.begin(), v.end());
@@ -179,7 +179,7 @@ int main(int argc, char** argv) {
   try {
     const MapDirectory in =
         openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "relax_bench: warning: " << w << "\n"; });
-    const std::vector<std::optional<Pose2D>> truth_by_index = slam_eval::readTruth(truth_path);
+    const std::vector<std::optional<Pose2D>> truth_by_index = eval::readTruth(truth_path);
     const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
     if (n < 2) throw IoError(map_dir, "holds " + std::to_string(n) + " scan(s): a graph needs two");
 

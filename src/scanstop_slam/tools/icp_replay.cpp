@@ -18,7 +18,7 @@
 #include "scanstop_common/map_check.h"
 #include "scanstop_common/options.h"
 #include "scanstop_slam/icp_slam.h"
-#include "truth_file.h"  // eval/: ground truth, not SLAM
+#include "scanstop_eval/truth_file.h"  // eval/: ground truth, not SLAM
 
 using namespace scanstop;
 
@@ -213,7 +213,7 @@ int main(int argc, char** argv) {
     const MapDirectory in =
         openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "icp_replay: warning: " << w << "\n"; });
     std::vector<std::optional<Pose2D>> truth;
-    if (!truth_path.empty()) truth = slam_eval::readTruth(truth_path);
+    if (!truth_path.empty()) truth = eval::readTruth(truth_path);
     if (isolated_from > 0 && isolated.empty()) {
       std::cerr << "icp_replay: --from needs --isolated (a full replay registers every scan)\n";
       return kExitUsage;
@@ -299,7 +299,7 @@ int main(int argc, char** argv) {
           at.push_back(pose(i));
           true_at.push_back(truthOf(i));
         }
-        const slam_eval::TrajectoryError e = slam_eval::trajectoryError(at, true_at);
+        const eval::TrajectoryError e = eval::trajectoryError(at, true_at);
         std::printf("%-28s over %zu scans: position RMS %6.1f cm max %6.1f cm; yaw RMS %5.2f deg max %5.2f deg\n", what,
                     e.scans, e.rms_m * 100, e.max_m * 100, e.yaw_rms_deg, e.yaw_max_deg);
       };

@@ -54,5 +54,17 @@ struct MapSurfaceCoverage {
 MapSurfaceCoverage mapSurfaceCoverage(const VisibleSurface& visible, const MapDirectory& map, const Pose2D& world_T_map,
                                       double tolerance_m, std::vector<std::string>* problems = nullptr);
 
+/// A simulated run's surface coverage in one call (mission_node's report): the surface visible from
+/// the truly reachable floor (a perfect simulator of `world`, the oracle's candidate scans with
+/// `planes` planes for a robot of robot_radius_m), then mapSurfaceCoverage at the oracle's 3 cm.
+/// start: the map frame in the world. Throws as visibleSurface and mapSurfaceCoverage.
+struct RunSurfaceCoverage {
+  MapSurfaceCoverage held;
+  size_t candidates = 0;  ///< candidate scans of the visible surface
+  double seconds = 0.0;   ///< wall time of the visible surface [s]
+};
+RunSurfaceCoverage surfaceCoverageOfRun(const TriangleMesh& world, const std::string& world_name, const Pose2D& start,
+                                        const MapDirectory& map, double robot_radius_m, int planes);
+
 }  // namespace eval
 }  // namespace scanstop

@@ -71,5 +71,10 @@ void applyBody(const RobotBody& body, const BodyMargins& margins, ExplorerConfig
 /// unknown name, a value of the wrong type or out of range, each naming the file and the parameter.
 void readParameterFile(const std::string& path, ExplorerConfig& c);
 
+/// The configuration as a parameter file that readParameterFile() reads back to the same c: every
+/// name of forEachParameter, and robot_radius_m and robot_height_m as they are (from the body or set).
+/// `comment` goes first, as '#' lines.
+std::string parameterFileText(const ExplorerConfig& c, const std::string& comment = "");
+
 }  // namespace explorer
 }  // namespace scanstop

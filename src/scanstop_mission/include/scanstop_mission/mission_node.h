@@ -73,7 +73,9 @@ class MissionNode {
   std::string world_file_, world_frame_ = "world", map_frame_ = "map";
   double robot_radius_m_ = 0.3;
   bool robot_radius_given_ = false;  ///< ~robot_radius set; otherwise the explorer's robot_radius_m
-  std::string explorer_ns_ = "explorer_node";  ///< where the explorer's parameters are (true coverage)
+  /// The explorer's configuration of this run (explorer_node writes it into its run_dir): the true
+  /// coverage rebuilds the floor map with it.
+  std::string explorer_config_;
   int surface_planes_ = 100;         ///< planes of the visible surface's candidate scans; 0: no surface coverage
   ros::Subscriber static_tf_sub_;
   std::mutex start_mutex_;

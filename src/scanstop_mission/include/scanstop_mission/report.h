@@ -63,7 +63,7 @@ struct Summary {
   size_t surface_visible = 0;          ///< visible surface elements (5 cm)
 };
 
-/// Ground-truth coverage of a simulated run (explorer::groundTruthCoverage on the final map).
+/// Ground-truth coverage of a simulated run (eval::groundTruthCoverageOfRun on the final map).
 struct TrueCoverage {
   double coverage = 0.0;      ///< observed / reachable [0..1]
   double reachable_m2 = 0.0;  ///< [m^2]

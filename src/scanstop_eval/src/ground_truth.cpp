@@ -1,4 +1,6 @@
-#include "scanstop_explorer/ground_truth.h"
+#include "scanstop_eval/ground_truth.h"
+
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,9 +13,13 @@
 
 #include "scanstop_explorer/explorer.h"
 #include "scanstop_explorer/floor_map.h"
+#include "scanstop_explorer/parameters.h"
 
 namespace scanstop {
-namespace explorer {
+namespace eval {
+
+using explorer::Explorer;
+using explorer::kFloor;
 
 ReachableFloor reachableFloor(const TriangleMesh& world, const Pose2D& start_world, double robot_radius_m,
                               double resolution, double z_lo, double z_hi) {
@@ -99,6 +105,7 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
     throw std::invalid_argument("groundTruthCoverage: states must be CV_8U of the map geometry's size");
   ReachableFloor truth = reachableFloor(world, start_world, robot_radius_m, resolution, z_lo, z_hi);
   GroundTruthCoverage out;
+  out.robot_radius_m = robot_radius_m;
   out.geometry = truth.geometry;
   out.obstacle = truth.obstacle;
   out.reachable = truth.reachable;
@@ -135,5 +142,20 @@ GroundTruthCoverage groundTruthCoverageOfMap(const TriangleMesh& world, const Po
   return c;
 }
 
-}  // namespace explorer
+GroundTruthCoverage groundTruthCoverageOfRun(const TriangleMesh& world, const Pose2D& start_world,
+                                             const MapDirectory& map, const std::string& explorer_config_file,
+                                             std::optional<double> robot_radius_m, std::string* note) {
+  ExplorerConfig config;
+  if (note) note->clear();
+  struct stat st;
+  if (!explorer_config_file.empty() && ::stat(explorer_config_file.c_str(), &st) == 0)
+    explorer::readParameterFile(explorer_config_file, config);
+  else if (note)
+    *note = "no explorer configuration " + (explorer_config_file.empty() ? std::string("given") : explorer_config_file) +
+            ": the explorer's defaults";
+  return groundTruthCoverageOfMap(world, start_world, map, robot_radius_m.value_or(config.planner.robot_radius_m), 0.1,
+                                  nullptr, config);
+}
+
+}  // namespace eval
 }  // namespace scanstop

@@ -1,4 +1,4 @@
-#include "truth_file.h"
+#include "scanstop_eval/truth_file.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -9,7 +9,7 @@
 #include "scanstop_common/file_util.h"
 
 namespace scanstop {
-namespace slam_eval {
+namespace eval {
 
 std::vector<std::optional<Pose2D>> readTruth(const std::string& path) {
   std::vector<std::optional<Pose2D>> out;
@@ -84,5 +84,5 @@ MeasurementError measurementError(const Pose2D& true_from, const Pose2D& true_to
   return m;
 }
 
-}  // namespace slam_eval
+}  // namespace eval
 }  // namespace scanstop

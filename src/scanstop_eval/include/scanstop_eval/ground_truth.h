@@ -1,11 +1,12 @@
 #pragma once
-/// Ground-truth floor coverage in simulation: which share of the floor the robot could really
+/// Ground-truth floor coverage in simulation (evaluation, not exploration: the explorer never sees it): which share of the floor the robot could really
 /// reach (from the world mesh) did the explorer's floor map observe? The explorer's own `coverage`
 /// only counts cells it can reach in its own map: a door it wrongly thinks closed hides the rooms
 /// behind it and still gives 100 %.
 
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,10 @@
 #include "scanstop_explorer/grid.h"
 
 namespace scanstop {
-namespace explorer {
+namespace eval {
+
+using explorer::ExplorerConfig;
+using explorer::GridGeometry;
 
 /// The floor a robot disc can really reach in a world, from the world's mesh, on a world-frame grid.
 struct ReachableFloor {
@@ -43,6 +47,7 @@ struct GroundTruthCoverage {
   double observed_m2 = 0.0;   ///< of it, floor in the explorer's map (within tolerance)
   double coverage = 0.0;      ///< observed / reachable
   size_t scans = 0;           ///< scans of the map (groundTruthCoverageOfMap; 0 otherwise)
+  double robot_radius_m = 0.0;  ///< the robot disc the reachable floor was swept with [m]
   GridGeometry geometry;      ///< world frame grid of the masks
   cv::Mat obstacle, reachable, observed;  ///< CV_8U 0/1
 };
@@ -66,5 +71,14 @@ GroundTruthCoverage groundTruthCoverageOfMap(const TriangleMesh& world, const Po
                                              std::vector<std::string>* problems = nullptr,
                                              const ExplorerConfig& config = ExplorerConfig());
 
-}  // namespace explorer
+/// The same for a run: the explorer configuration is the run's own file (explorer_node writes it as
+/// <explorer run_dir>/config.yaml; explorer::readParameterFile reads it), the robot radius that
+/// file's robot_radius_m unless `robot_radius_m` is given. A missing file: the explorer's defaults,
+/// said in *note (left empty otherwise). Throws as groundTruthCoverageOfMap, and IoError / ConfigError
+/// naming a file that exists but cannot be used.
+GroundTruthCoverage groundTruthCoverageOfRun(const TriangleMesh& world, const Pose2D& start_world,
+                                             const MapDirectory& map, const std::string& explorer_config_file,
+                                             std::optional<double> robot_radius_m, std::string* note = nullptr);
+
+}  // namespace eval
 }  // namespace scanstop

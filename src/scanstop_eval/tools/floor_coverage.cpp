@@ -14,7 +14,7 @@
 #include "scanstop_common/map_check.h"
 #include "scanstop_common/options.h"
 #include "scanstop_common/stl_io.h"
-#include "scanstop_explorer/ground_truth.h"
+#include "scanstop_eval/ground_truth.h"
 #include "scanstop_explorer/parameters.h"
 
 namespace {
@@ -63,8 +63,8 @@ int main(int argc, char** argv) {
       std::cerr << "floor_coverage: warning: " << w << "\n";
     });
     std::vector<std::string> problems;
-    const explorer::GroundTruthCoverage c =
-        explorer::groundTruthCoverageOfMap(world, *start, dir, radius, tolerance, &problems, config);
+    const eval::GroundTruthCoverage c =
+        eval::groundTruthCoverageOfMap(world, *start, dir, radius, tolerance, &problems, config);
     for (size_t k = dir.problems().size(); k < problems.size(); ++k) {
       if (!skip_bad) throw IoError(dir.dir(), problems[k] + " (--skip-bad uses the other scans)");
       std::cerr << "floor_coverage: warning: skipped: " << problems[k] << "\n";

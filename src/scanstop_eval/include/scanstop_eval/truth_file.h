@@ -1,5 +1,5 @@
 #pragma once
-/// Ground truth for the offline SLAM tools (icp_replay, relax_bench): the true pose of every scan as
+/// Ground truth for mission_node's report and the offline SLAM tools (icp_replay, relax_bench): the true pose of every scan as
 /// mission_node writes it in simulation (mission_state.yaml, `scans: [{index, true_pose: [x, y,
 /// yaw]}, ...]`), and the pose error of a trajectory against it. Evaluation, not SLAM: the core
 /// (scanstop_slam_core) never sees it.
@@ -11,7 +11,7 @@
 #include "scanstop_common/pose.h"
 
 namespace scanstop {
-namespace slam_eval {
+namespace eval {
 
 /// True poses by scan index (a scan the mission adopted after a crash may have none). Throws
 /// IoError naming the file (and the scan entry) for a missing or unreadable file, YAML that is not
@@ -45,5 +45,5 @@ struct MeasurementError {
 MeasurementError measurementError(const Pose2D& true_from, const Pose2D& true_to, const Pose2D& measured,
                                   const Eigen::Matrix3d& information);
 
-}  // namespace slam_eval
+}  // namespace eval
 }  // namespace scanstop
