@@ -272,6 +272,7 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
   res.complete_reason = r.success ? r.complete_reason : r.message;
   res.coverage = r.coverage;
   res.scans = static_cast<uint32_t>(explorer_->scanCount());
+  res.d_max_m = explorer_->config().planner.d_max_m;
   res.floor_area_m2 = r.floor_area_m2;
   res.accessible_area_m2 = r.accessible_area_m2;
   res.score = r.score;

@@ -433,7 +433,7 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
     // The leg's own frame: x along the way the robot moves (backwards: behind it).
     const Pose2D way(0.0, 0.0, leg.backwards ? M_PI : 0.0);
     const double sign = leg.backwards ? -1.0 : 1.0;
-    double step = std::min(distance, config_.d_max_m);  // never more than d_max in one go
+    double step = std::min(distance, leg_max_m_ > 0.0 ? leg_max_m_ : config_.d_max_m);  // never more than d_max in one go
     // The map's clearance of the leg: what the robot may be off its estimate and still pass. When
     // odometry since the scan may be off by more (and the plain disc would pass), scan here first.
     if (config_.leg_check && clearance_m && config_.leg_check_radius_m <= *clearance_m &&
@@ -829,6 +829,7 @@ State Mission::run() {
         break;
       }
       if (!plan.success) return finish(State::Failed, "the explorer could not plan: " + plan.message);
+      if (plan.d_max_m > 0.0) leg_max_m_ = plan.d_max_m;
       pending_plan_wall_s_ += plan.wall_time_s;
       {
         std::lock_guard<std::mutex> lock(mutex_);

@@ -78,7 +78,6 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   config_.run_dir = params.require<std::string>("run_dir");
   params.optional("planes", config_.planes);
   params.optional("max_scans", config_.max_scans);
-  params.optional("d_max", config_.d_max_m);
   params.optional("waypoint_tolerance", config_.waypoint_tolerance_m);
   params.optional("heading_tolerance", config_.heading_tolerance_rad);
   params.optional("min_scan_travel", config_.min_scan_travel_m);

@@ -9,6 +9,7 @@
 #include <scanstop_msgs/TakeScan.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <condition_variable>
 #include <memory>
@@ -281,6 +282,7 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
   r.complete = srv.response.exploration_complete;
   r.complete_reason = srv.response.complete_reason;
   r.coverage = srv.response.coverage;
+  r.d_max_m = std::isfinite(srv.response.d_max_m) && srv.response.d_max_m > 0.0 ? srv.response.d_max_m : 0.0;
   return r;
 }
 

@@ -23,7 +23,8 @@ BAD_PARAMETERS = [
     (["_planes:=37"], ["'planes'", "37", "must be one of 50, 100, 200, 400"]),
     (["_planes:=abc"], ["/mission_node/planes", "wrong type"]),
     (["_max_scans:=-3"], ["'max_scans'", "-3", "out of range [0, 100000]"]),
-    (["_d_max:=100.0"], ["'d_max'", "100 m", "out of range [0.05, 10 m]"]),
+    # d_max has one source, the explorer's d_max_m (every plan says it): the mission has none.
+    (["_d_max:=2.0"], ["unknown parameter '/mission_node/d_max'"]),
     (["_min_scan_travel:=-1.0"], ["'min_scan_travel'", "-1 m", "out of range [0, 100 m]"]),
     (["_heading_tolerance:=3.0"], ["'heading_tolerance'", "3 rad", "out of range [0, 0.5 rad]"]),
     (["_max_step_retries:=1000"], ["'max_step_retries'", "1000", "out of range [0, 100]"]),

@@ -71,6 +71,7 @@ class FakeSystem : public RobotSystem {
   int lose_register_answers = 0;                  // store the scan but report failure this many times
   // Observations
   double max_forward = 0.0;
+  double plan_d_max_m = 0.0;  ///< PlanResult::d_max_m of every plan (0: not said)
   std::vector<double> forwards;                   // every forward distance asked for, in order
   std::vector<std::pair<char, double>> motions;   // every motion: ('r', angle) or ('f', distance)
   std::vector<Eigen::Vector2d> trail;             // the true position after every forward motion
@@ -183,6 +184,7 @@ class FakeSystem : public RobotSystem {
                       const std::vector<Contact>& contacts, const std::optional<Eigen::Vector2d>& goal) override {
     PlanResult r;
     r.duration_s = 0.25;  // the explorer's compute
+    r.d_max_m = plan_d_max_m;
     plan_contacts.push_back(contacts);
     forwards_at_plan.push_back(forwards.size());
     if (always_fail_plan || plan_failures_left > 0) {
@@ -476,6 +478,21 @@ TEST(Mission, StraightMotionsNeverExceedDMax) {
   EXPECT_EQ(m.run(), State::Done);
   EXPECT_LE(sys.max_forward, 2.0 + 1e-9);
   EXPECT_GT(sys.max_forward, 1.5);
+}
+
+// d_max has one source, the explorer's d_max_m: a plan that says it bounds every straight motion
+// after it, whatever the mission's own fallback.
+TEST(Mission, TheExplorersDMaxBoundsTheMotionsOncePlanned) {
+  TempDir dir;
+  FakeSystem sys;
+  sys.targets = {{7.0, 0.0}};
+  sys.plan_d_max_m = 1.2;
+  MissionConfig c = config(dir.path());
+  c.d_max_m = 2.0;
+  Mission m(c, sys, quiet, quiet);
+  EXPECT_EQ(m.run(), State::Done);
+  EXPECT_LE(sys.max_forward, 1.2 + 1e-9);
+  EXPECT_GT(sys.max_forward, 1.0);
 }
 
 TEST(Mission, ScansAtIntermediateLandmarks) {

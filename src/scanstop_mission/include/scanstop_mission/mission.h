@@ -23,7 +23,9 @@ namespace mission {
 struct MissionConfig {
   int planes = 400;                      ///< planes per 3D scan: 50, 100, 200 or 400
   int max_scans = 0;                     ///< scan budget; 0 = until exploration is complete
-  double d_max_m = 2.0;                  ///< longest straight motion [m] (thesis d_max)
+  /// Longest straight motion [m] (thesis d_max) until a plan says the explorer's (PlanResult::d_max_m):
+  /// one source, the explorer's d_max_m (config/explorer.yaml); this is the fallback.
+  double d_max_m = 2.0;
   double waypoint_tolerance_m = 0.05;    ///< a waypoint closer than this is reached [m]
   double heading_tolerance_rad = 0.005;  ///< rotations smaller than this are skipped [rad]
   /// Scans at intermediate landmarks (thesis 5.5) only once the path driven since the last scan is
@@ -255,6 +257,7 @@ class Mission {
   /// pose they were taken at (the leg check).
   std::vector<Eigen::Vector2d> obstacles_;
   Pose2D obstacles_odom_;
+  double leg_max_m_ = 0.0;  ///< the last plan's d_max (0: none yet: config_.d_max_m)
   DeadReckoning dead_reckoning_;  ///< what odometry cannot see since that scan (the leg check)
   Log info_, warn_;
   mutable std::mutex mutex_;

@@ -74,6 +74,7 @@ struct PlanResult : StepResult {
   bool complete = false;                   ///< exploration is complete
   std::string complete_reason;
   double coverage = 0.0;                   ///< observed share of the reachable floor [0..1]
+  double d_max_m = 0.0;                    ///< the explorer's d_max: the longest straight motion [m]; 0: not said
 };
 
 /// A reconstructed surface mesh.
