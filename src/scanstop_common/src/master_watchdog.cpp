@@ -20,7 +20,7 @@ std::string seconds(double s) {
 
 MasterWatchdog::MasterWatchdog(std::string master_uri, double timeout_s) : uri_(std::move(master_uri)), timeout_s_(timeout_s) {
   if (!std::isfinite(timeout_s) || timeout_s <= 0.0 || timeout_s > 86400.0)
-    throw ConfigError("parameter 'master_timeout' = " + std::to_string(timeout_s) +
+    throw ConfigError("parameter 'master_timeout_s' = " + std::to_string(timeout_s) +
                       " s must be in (0, 86400] s (how long the ROS master may be unreachable)");
 }
 
@@ -57,12 +57,12 @@ MasterWatchdog::Event MasterWatchdog::update(double now_s, bool reachable, long 
     state_ = State::Lost;
     lost_since_s_ = last_ok_s_;
     message_ = master + " is unreachable (gone for " + seconds(now_s - lost_since_s_) +
-               "); waiting up to master_timeout = " + seconds(timeout_s_) + " for it to come back";
+               "); waiting up to master_timeout_s = " + seconds(timeout_s_) + " for it to come back";
     return Event::Lost;
   }
   if (now_s - lost_since_s_ >= timeout_s_) {
     state_ = State::TimedOut;
-    message_ = master + " has been unreachable for " + seconds(now_s - lost_since_s_) + " (master_timeout = " +
+    message_ = master + " has been unreachable for " + seconds(now_s - lost_since_s_) + " (master_timeout_s = " +
                seconds(timeout_s_) + ")";
     return Event::TimedOut;
   }

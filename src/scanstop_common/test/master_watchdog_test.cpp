@@ -25,12 +25,12 @@ TEST(MasterWatchdog, LostOnceThenTimedOutNamingTheUriAndHowLong) {
   EXPECT_EQ(w.state(), State::Lost);
   // Gone since the last check that reached it (100.5).
   EXPECT_TRUE(contains(w.message(), "the ROS master at http://127.0.0.1:11471 is unreachable (gone for 0.5 s)")) << w.message();
-  EXPECT_TRUE(contains(w.message(), "master_timeout = 10.0 s")) << w.message();
+  EXPECT_TRUE(contains(w.message(), "master_timeout_s = 10.0 s")) << w.message();
   for (double t = 101.5; t < 110.5; t += 0.5) EXPECT_EQ(w.update(t, false), Event::None) << t;  // said once
   EXPECT_DOUBLE_EQ(w.lostFor(110.0), 9.5);
   EXPECT_EQ(w.update(110.5, false), Event::TimedOut);
   EXPECT_EQ(w.state(), State::TimedOut);
-  EXPECT_TRUE(contains(w.message(), "the ROS master at http://127.0.0.1:11471 has been unreachable for 10.0 s (master_timeout = 10.0 s)"))
+  EXPECT_TRUE(contains(w.message(), "the ROS master at http://127.0.0.1:11471 has been unreachable for 10.0 s (master_timeout_s = 10.0 s)"))
       << w.message();
   // Final: nothing more, also when the master comes back.
   EXPECT_EQ(w.update(111.0, false), Event::None);
@@ -82,7 +82,7 @@ TEST(MasterWatchdog, TheTimeoutIsValidatedNamingTheParameter) {
       MasterWatchdog w(kUri, bad);
       ADD_FAILURE() << bad << " accepted";
     } catch (const ConfigError& e) {
-      EXPECT_TRUE(contains(e.what(), "parameter 'master_timeout'")) << e.what();
+      EXPECT_TRUE(contains(e.what(), "parameter 'master_timeout_s'")) << e.what();
       EXPECT_TRUE(contains(e.what(), "(0, 86400] s")) << e.what();
     }
   }

@@ -11,11 +11,11 @@ int main(int argc, char** argv) {
   // naming a bad parameter would no longer be printed.
   ros::NodeHandle nh, pnh("~");
   try {
-    double master_timeout = 30.0;
-    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
+    double master_timeout_s = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout_s", master_timeout_s);
     scanstop::explorer::ExplorerNode node(nh, pnh);
-    // The ROS master gone: ERROR once; gone longer than master_timeout (or a new master): end.
-    scanstop::RosMasterWatchdog watchdog("explorer_node", master_timeout);
+    // The ROS master gone: ERROR once; gone longer than master_timeout_s (or a new master): end.
+    scanstop::RosMasterWatchdog watchdog("explorer_node", master_timeout_s);
     ros::spin();
     if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {

@@ -34,8 +34,8 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
   ros_params::ParamReader params(pnh, "explorer_node");
   params.known({"robot_body"});  // readRobotBody() below, when the body is set in this namespace
   params.optional("frame_id", n.frame_id);
-  double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
-  params.optional("master_timeout", master_timeout);
+  double master_timeout_s = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
+  params.optional("master_timeout_s", master_timeout_s);
   bool end_launch = false;  // read by main() after a start-up error; a known name here
   params.optional("end_launch_on_setup_error", end_launch);
   params.optional("map_dir", n.map_dir);

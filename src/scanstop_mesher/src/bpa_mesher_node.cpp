@@ -77,7 +77,7 @@ std::string MesherNodeConfig::allowedOutputDir() const {
 BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   MesherNodeConfig& c = config_;
   ros_params::ParamReader params(pnh, "bpa_mesher_node");
-  params.known({"master_timeout", "end_launch_on_setup_error"});  // main()'s
+  params.known({"master_timeout_s", "end_launch_on_setup_error"});  // main()'s
   params.optional("map_dir", c.map_dir);
   params.optional("frame_id", c.frame_id);
   params.optional("default_output", c.default_output);

@@ -78,19 +78,19 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   config_.run_dir = params.require<std::string>("run_dir");
   params.optional("planes", config_.planes);
   params.optional("max_scans", config_.max_scans);
-  params.optional("waypoint_tolerance", config_.waypoint_tolerance_m);
-  params.optional("heading_tolerance", config_.heading_tolerance_rad);
-  params.optional("min_scan_travel", config_.min_scan_travel_m);
+  params.optional("waypoint_tolerance_m", config_.waypoint_tolerance_m);
+  params.optional("heading_tolerance_rad", config_.heading_tolerance_rad);
+  params.optional("min_scan_travel_m", config_.min_scan_travel_m);
   params.optional("scan_on_the_way", config_.scan_on_the_way);
-  params.optional("scan_error_bound", config_.scan_error_bound_m);
+  params.optional("scan_error_bound_m", config_.scan_error_bound_m);
   params.optional("return_home", config_.return_home);
-  params.optional("home_tolerance", config_.home_tolerance_m);
-  params.optional("home_scan_travel", config_.home_scan_travel_m);
+  params.optional("home_tolerance_m", config_.home_tolerance_m);
+  params.optional("home_scan_travel_m", config_.home_scan_travel_m);
   params.optional("max_step_retries", config_.max_step_retries);
-  params.optional("contact_backoff", config_.contact_backoff_m);
-  params.optional("contact_offset", config_.contact_offset_m);
+  params.optional("contact_backoff_m", config_.contact_backoff_m);
+  params.optional("contact_offset_m", config_.contact_offset_m);
   params.optional("max_contacts", config_.max_contacts);
-  params.optional("contact_point_radius", config_.contact_point_radius_m);
+  params.optional("contact_point_radius_m", config_.contact_point_radius_m);
   params.optional("leg_check", config_.leg_check);
   // The swept disc and the heights of the leg check come from the body (robot_body/...,
   // config/robot_body.yaml): radius + leg_check_body_margin, up to the body's height.
@@ -98,29 +98,29 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   {
     const RobotBody body = ros_params::readRobotBody(pnh);
     double body_margin = 0.02;
-    params.optional("leg_check_body_margin", body_margin);
+    params.optional("leg_check_body_margin_m", body_margin);
     if (!(body_margin >= 0.0 && body_margin <= 1.0))
-      throw ConfigError("parameter '" + pnh.resolveName("leg_check_body_margin") + "' = " + std::to_string(body_margin) +
+      throw ConfigError("parameter '" + pnh.resolveName("leg_check_body_margin_m") + "' = " + std::to_string(body_margin) +
                         " m must be in [0, 1] m");
     config_.leg_check_radius_m = body.radius_m + body_margin;
     config_.leg_check_max_z_m = body.height_m;
   }
-  params.optional("leg_check_radius", config_.leg_check_radius_m);
-  params.optional("leg_check_margin", config_.leg_check_margin_m);
-  params.optional("obstruction_standoff", config_.obstruction_standoff_m);
-  params.optional("leg_check_min_z", config_.leg_check_min_z_m);
-  params.optional("leg_check_max_z", config_.leg_check_max_z_m);
-  params.optional("leg_check_self", config_.leg_check_self_m);
+  params.optional("leg_check_radius_m", config_.leg_check_radius_m);
+  params.optional("leg_check_margin_m", config_.leg_check_margin_m);
+  params.optional("obstruction_standoff_m", config_.obstruction_standoff_m);
+  params.optional("leg_check_min_z_m", config_.leg_check_min_z_m);
+  params.optional("leg_check_max_z_m", config_.leg_check_max_z_m);
+  params.optional("leg_check_self_m", config_.leg_check_self_m);
   params.optional("leg_check_min_points", config_.leg_check_min_points);
   params.optional("leg_check_turn_error", config_.leg_check_turn_error);
   params.optional("leg_check_drift", config_.leg_check_drift);
   params.optional("leg_check_distance_error", config_.leg_check_distance_error);
-  params.optional("leg_check_turn_position", config_.leg_check_turn_position_m_per_rad);
+  params.optional("leg_check_turn_position_m_per_rad", config_.leg_check_turn_position_m_per_rad);
   params.optional("reverse_legs", config_.reverse_legs);
-  params.optional("relocalize_min_travel", config_.relocalize_min_travel_m);
-  params.optional("relocalize_min_turn", config_.relocalize_min_turn_rad);
-  params.optional("leg_sidestep", config_.leg_sidestep_m);
-  params.optional("retry_backoff", config_.retry_backoff_s);
+  params.optional("relocalize_min_travel_m", config_.relocalize_min_travel_m);
+  params.optional("relocalize_min_turn_rad", config_.relocalize_min_turn_rad);
+  params.optional("leg_sidestep_m", config_.leg_sidestep_m);
+  params.optional("retry_backoff_s", config_.retry_backoff_s);
   params.optional("max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);
   params.optional("build_mesh", config_.build_mesh);
   params.optional("world", config_.world);
@@ -132,8 +132,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   params.optional("world_file", world_file_);
   params.optional("world_frame", world_frame_);
   params.optional("map_frame", map_frame_);
-  robot_radius_given_ = params.has("robot_radius");
-  params.optional("robot_radius", robot_radius_m_);
+  robot_radius_given_ = params.has("robot_radius_m");
+  params.optional("robot_radius_m", robot_radius_m_);
   explorer_config_ = config_.run_dir + "/explorer/config.yaml";
   params.optional("explorer_config", explorer_config_);
   params.optional("surface_planes", surface_planes_);
@@ -141,24 +141,24 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     throw ConfigError("parameter '" + pnh.resolveName("surface_planes") + "' = " + std::to_string(surface_planes_) +
                       " must be in [0, 2000] (0: no surface coverage)");
   if (!(robot_radius_m_ > 0.0 && robot_radius_m_ <= 5.0))
-    throw ConfigError("parameter '" + pnh.resolveName("robot_radius") + "' = " + std::to_string(robot_radius_m_) +
+    throw ConfigError("parameter '" + pnh.resolveName("robot_radius_m") + "' = " + std::to_string(robot_radius_m_) +
                       " m must be in (0, 5] m");
   if (!world_file_.empty() && (world_frame_.empty() || map_frame_.empty() || world_frame_ == map_frame_))
     throw ConfigError("parameters '" + pnh.resolveName("world_frame") + "' and '" + pnh.resolveName("map_frame") +
                       "' must be two different, non-empty frame ids");
   CallTimeouts timeouts;
-  params.optional("wait_for_service_timeout", timeouts.wait_for_service_s);
-  params.optional("scan_timeout", timeouts.scan_s);
-  params.optional("motion_timeout", timeouts.motion_s);
-  params.optional("register_timeout", timeouts.register_s);
-  params.optional("plan_timeout", timeouts.plan_s);
-  params.optional("mesh_timeout", timeouts.mesh_s);
-  for (const auto& [name, value] : {std::pair<const char*, double>{"wait_for_service_timeout", timeouts.wait_for_service_s},
-                                    {"scan_timeout", timeouts.scan_s},
-                                    {"motion_timeout", timeouts.motion_s},
-                                    {"register_timeout", timeouts.register_s},
-                                    {"plan_timeout", timeouts.plan_s},
-                                    {"mesh_timeout", timeouts.mesh_s}}) {
+  params.optional("wait_for_service_timeout_s", timeouts.wait_for_service_timeout_s);
+  params.optional("scan_timeout_s", timeouts.scan_timeout_s);
+  params.optional("motion_timeout_s", timeouts.motion_timeout_s);
+  params.optional("register_timeout_s", timeouts.register_timeout_s);
+  params.optional("plan_timeout_s", timeouts.plan_timeout_s);
+  params.optional("mesh_timeout_s", timeouts.mesh_timeout_s);
+  for (const auto& [name, value] : {std::pair<const char*, double>{"wait_for_service_timeout_s", timeouts.wait_for_service_timeout_s},
+                                    {"scan_timeout_s", timeouts.scan_timeout_s},
+                                    {"motion_timeout_s", timeouts.motion_timeout_s},
+                                    {"register_timeout_s", timeouts.register_timeout_s},
+                                    {"plan_timeout_s", timeouts.plan_timeout_s},
+                                    {"mesh_timeout_s", timeouts.mesh_timeout_s}}) {
     if (!(value > 0.0 && value < 1e6))
       throw ConfigError(std::string("parameter '") + pnh.resolveName(name) + "' = " + std::to_string(value) +
                         " must be in (0, 1e6) s");
@@ -175,7 +175,7 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     const std::string self = n > 0 ? std::string(exe, static_cast<size_t>(n)) : std::string();
     report_script_ = self.substr(0, self.find_last_of('/') + 1) + "make_report.py";
   }
-  params.optional("master_timeout", master_timeout_s_);
+  params.optional("master_timeout_s", master_timeout_s_);
   // run_identity: readIdentityParam() below; robot_body/...: readRobotBody() (when set in this namespace).
   params.known({"run_identity", "robot_body"});
   // A misspelt parameter would silently keep its default: refuse it.

@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
   try {
     scanstop::mission::MissionNode node(nh, pnh);
     // The ROS master gone: the mission pauses, keeping its state; back: it resumes; gone longer than
-    // master_timeout (or a new master): the mission ends FAILED naming why, then the node (exit 1).
+    // master_timeout_s (or a new master): the mission ends FAILED naming why, then the node (exit 1).
     scanstop::RosMasterWatchdog::Handlers handlers;
     handlers.on_lost = [&node](const std::string& why) { node.onMasterLost(why); };
     handlers.on_back = [&node](const std::string& why) { node.onMasterBack(why); };

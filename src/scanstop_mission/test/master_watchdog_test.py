@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """The ROS master going away mid-run (issue #22 class 5): a private rosmaster on a free loopback
 port; sim_node, icp_slam_node, explorer_node, bpa_mesher_node and mission_node (autostart off) each
-with master_timeout = 8 s.
+with master_timeout_s = 8 s.
 
 1. The master hangs for 5 s (SIGSTOP, then SIGCONT: the same master): every node logs one ERROR
    naming the master URI and how long it has been gone, then "is back after"; sim_node refuses a
    base/forward meanwhile (persistent connection, no master needed) and accepts it once the master
    is back; mission_node pauses and resumes; every node keeps running.
-2. The master is killed (SIGKILL): the same ERROR, then after master_timeout every node ends with
-   exit code 1 naming "has been unreachable for ... (master_timeout = 8.0 s)"; the mission ends
+2. The master is killed (SIGKILL): the same ERROR, then after master_timeout_s every node ends with
+   exit code 1 naming "has been unreachable for ... (master_timeout_s = 8.0 s)"; the mission ends
    FAILED with that reason in mission_state.yaml.
 
 Not a rostest: it owns its master (rostest's would be killed). Run by run_tests_scanstop_mission
@@ -85,7 +85,7 @@ class MasterWatchdog(unittest.TestCase):
                                                     "_run_dir:=" + os.path.join(run, "explorer")]),
             "bpa_mesher_node": ("scanstop_mesher", ["_map_dir:=" + os.path.join(run, "map")]),
             "mission_node": (PKG, ["_run_dir:=" + run, "_world:=room_10x8", "_autostart:=false", "_planes:=50",
-                                   "_wait_for_service_timeout:=5.0"]),
+                                   "_wait_for_service_timeout_s:=5.0"]),
         }
         cls.logs = {}
         for name in NODES:
@@ -177,7 +177,7 @@ class MasterWatchdog(unittest.TestCase):
         for n in NODES:
             self.assertEqual(self.procs[n].returncode, 1, "%s exit code\n%s" % (n, self.text(n)))
             self.assertTrue(self.lines(n, why), "%s\n%s" % (n, self.text(n)))
-            self.assertIn("(master_timeout = 8.0 s); the node ends", self.lines(n, why)[0])
+            self.assertIn("(master_timeout_s = 8.0 s); the node ends", self.lines(n, why)[0])
         with open(os.path.join(self.run_dir, "mission_state.yaml")) as f:
             state = f.read()
         self.assertIn("FAILED", state)

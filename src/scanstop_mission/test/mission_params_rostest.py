@@ -25,12 +25,12 @@ BAD_PARAMETERS = [
     (["_max_scans:=-3"], ["'max_scans'", "-3", "out of range [0, 100000]"]),
     # d_max has one source, the explorer's d_max_m (every plan says it): the mission has none.
     (["_d_max:=2.0"], ["unknown parameter '/mission_node/d_max'"]),
-    (["_min_scan_travel:=-1.0"], ["'min_scan_travel'", "-1 m", "out of range [0, 100 m]"]),
-    (["_heading_tolerance:=3.0"], ["'heading_tolerance'", "3 rad", "out of range [0, 0.5 rad]"]),
+    (["_min_scan_travel_m:=-1.0"], ["'min_scan_travel_m'", "-1 m", "out of range [0, 100 m]"]),
+    (["_heading_tolerance_rad:=3.0"], ["'heading_tolerance_rad'", "3 rad", "out of range [0, 0.5 rad]"]),
     (["_max_step_retries:=1000"], ["'max_step_retries'", "1000", "out of range [0, 100]"]),
     (["_max_consecutive_failed_cycles:=0"], ["'max_consecutive_failed_cycles'", "0", "out of range [1, 1000]"]),
-    (["_scan_timeout:=-5.0"], ["/mission_node/scan_timeout", "-5", "must be in (0, 1e6) s"]),
-    (["_wait_for_service_timeout:=0.0"], ["/mission_node/wait_for_service_timeout", "must be in (0, 1e6) s"]),
+    (["_scan_timeout_s:=-5.0"], ["/mission_node/scan_timeout_s", "-5", "must be in (0, 1e6) s"]),
+    (["_wait_for_service_timeout_s:=0.0"], ["/mission_node/wait_for_service_timeout_s", "must be in (0, 1e6) s"]),
     (["_mesh_output:=/tmp/mesh.obj"], ["'mesh_output'", "/tmp/mesh.obj", "must end in .ply or .stl"]),
     (["_map_dir:="], ["/mission_node/map_dir", "empty"]),
     (["_plannes:=50"], ["unknown parameter '/mission_node/plannes' (did you mean 'planes'?): nothing reads it; "
@@ -83,7 +83,7 @@ class MissionParams(unittest.TestCase):
     def test_control_requests_that_do_not_apply_are_refused(self):
         rospy.init_node("mission_params_test", anonymous=True, disable_signals=True)
         # No scanner runs: a started mission waits for scanner/take_scan meanwhile.
-        self.proc = self.node(["_autostart:=false", "_wait_for_service_timeout:=8.0", "_planes:=50"])
+        self.proc = self.node(["_autostart:=false", "_wait_for_service_timeout_s:=8.0", "_planes:=50"])
         r = self.call("pause")
         self.assertFalse(r.success)
         self.assertIn("no mission is running", r.message)

@@ -1366,14 +1366,14 @@ TEST(Mission, PauseHoldsAndResumeContinues) {
 }
 
 // The ROS master gone (issue #22 class 5): the watchdog pauses the mission (state kept), and when
-// the master stays away longer than master_timeout ends it: FAILED with the watchdog's reason, the
+// the master stays away longer than master_timeout_s ends it: FAILED with the watchdog's reason, the
 // state saved with every scan, and a restarted mission_node resumes and completes it.
 TEST(Mission, EndedForTheMasterFailsNamingTheReasonKeepsItsStateAndResumes) {
   TempDir dir;
   FakeSystem sys;
   sys.targets = {{1, 0}, {2, 1}, {1, 2}, {0, 2}};
   const std::string reason =
-      "the ROS master at http://127.0.0.1:11471 has been unreachable for 3.0 s (master_timeout = 3.0 s)";
+      "the ROS master at http://127.0.0.1:11471 has been unreachable for 3.0 s (master_timeout_s = 3.0 s)";
   {
     Mission first(config(dir.path()), sys, quiet, quiet);
     sys.on_scan = [&first](int n) {

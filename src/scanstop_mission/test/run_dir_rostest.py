@@ -37,7 +37,7 @@ class RunDir(unittest.TestCase):
         subprocess.call(["rosparam", "delete", "/mission_node"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         subprocess.check_call(["rosparam", "set", "/mission_node/run_identity", IDENTITY])
         args = ["rosrun", PKG, "mission_node", "__name:=mission_node", "_autostart:=false", "_planes:=50",
-                "_wait_for_service_timeout:=5.0"] + params
+                "_wait_for_service_timeout_s:=5.0"] + params
         self.proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
 
     def fails_fast(self, params, *fragments):

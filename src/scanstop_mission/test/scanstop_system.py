@@ -84,7 +84,7 @@ class System(object):
             "mission": ["rosrun", "scanstop_mission", "mission_node", "__name:=mission_node", "_run_dir:=%s" % run,
                         "_map_dir:=%s/map" % run, "_planes:=%d" % self.planes, "_max_scans:=%d" % self.budget,
                         "_world:=%s" % self.world, "_shutdown_when_done:=true",
-                        "_wait_for_service_timeout:=60.0"] + self.mission_args,
+                        "_wait_for_service_timeout_s:=60.0"] + self.mission_args,
         }[name]
 
     def start(self, name):

@@ -20,23 +20,23 @@ std::string fmt(double v, int digits = 3) {
 }  // namespace
 
 void MotionConfig::validate(const std::string& p) const {
-  requireInRange(p + "linear_speed", linear_speed_mps, 0.01, 1.5, "m/s");
-  requireInRange(p + "angular_speed", angular_speed_radps, 0.02, 3.0, "rad/s");
-  requireInRange(p + "min_linear_speed", min_linear_speed_mps, 0.001, linear_speed_mps, "m/s");
-  requireInRange(p + "min_angular_speed", min_angular_speed_radps, 0.0175, angular_speed_radps, "rad/s");
-  requirePositive(p + "linear_decel", linear_decel_mps2, "m/s^2");
-  requirePositive(p + "angular_decel", angular_decel_radps2, "rad/s^2");
-  requireInRange(p + "approach_distance", approach_distance_m, 0.0, 1.0, "m");
-  requireInRange(p + "approach_angle", approach_angle_rad, 0.0, 1.0, "rad");
-  requireInRange(p + "distance_tolerance", distance_tolerance_m, 0.0, 0.5, "m");
-  requireInRange(p + "angle_tolerance", angle_tolerance_rad, 0.0, 0.5, "rad");
+  requireInRange(p + "linear_speed_mps", linear_speed_mps, 0.01, 1.5, "m/s");
+  requireInRange(p + "angular_speed_radps", angular_speed_radps, 0.02, 3.0, "rad/s");
+  requireInRange(p + "min_linear_speed_mps", min_linear_speed_mps, 0.001, linear_speed_mps, "m/s");
+  requireInRange(p + "min_angular_speed_radps", min_angular_speed_radps, 0.0175, angular_speed_radps, "rad/s");
+  requirePositive(p + "linear_decel_mps2", linear_decel_mps2, "m/s^2");
+  requirePositive(p + "angular_decel_radps2", angular_decel_radps2, "rad/s^2");
+  requireInRange(p + "approach_distance_m", approach_distance_m, 0.0, 1.0, "m");
+  requireInRange(p + "approach_angle_rad", approach_angle_rad, 0.0, 1.0, "rad");
+  requireInRange(p + "distance_tolerance_m", distance_tolerance_m, 0.0, 0.5, "m");
+  requireInRange(p + "angle_tolerance_rad", angle_tolerance_rad, 0.0, 0.5, "rad");
   requireInRange(p + "timeout_factor", timeout_factor, 1.0, 100.0);
-  requireInRange(p + "timeout_extra", timeout_extra_s, 0.0, 600.0, "s");
-  requireInRange(p + "stall_time", stall_time_s, 0.0, 10.0, "s");
-  requireInRange(p + "motors_disabled_time", motors_disabled_time_s, 0.0, 10.0, "s");
-  requireInRange(p + "settle_timeout", settle_timeout_s, 0.1, 30.0, "s");
-  requireInRange(p + "max_forward", max_forward_m, 0.01, 100.0, "m");
-  requireInRange(p + "max_rotate", max_rotate_rad, 0.01, 4.0 * M_PI, "rad");
+  requireInRange(p + "timeout_extra_s", timeout_extra_s, 0.0, 600.0, "s");
+  requireInRange(p + "stall_time_s", stall_time_s, 0.0, 10.0, "s");
+  requireInRange(p + "motors_disabled_time_s", motors_disabled_time_s, 0.0, 10.0, "s");
+  requireInRange(p + "settle_timeout_s", settle_timeout_s, 0.1, 30.0, "s");
+  requireInRange(p + "max_forward_m", max_forward_m, 0.01, 100.0, "m");
+  requireInRange(p + "max_rotate_rad", max_rotate_rad, 0.01, 4.0 * M_PI, "rad");
 }
 
 const char* toString(MotionOutcome outcome) {

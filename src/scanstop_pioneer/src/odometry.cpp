@@ -6,13 +6,13 @@ namespace scanstop {
 namespace pioneer {
 
 void RobotParams::validate(const std::string& prefix) const {
-  requireInRange(prefix + "angle_conv", angle_conv_rad, 1e-5, 0.1, "rad/unit");
-  requireInRange(prefix + "dist_conv", dist_conv_mm, 0.01, 100.0, "mm/unit");
+  requireInRange(prefix + "angle_conv_rad", angle_conv_rad, 1e-5, 0.1, "rad/unit");
+  requireInRange(prefix + "dist_conv_mm", dist_conv_mm, 0.01, 100.0, "mm/unit");
   requireInRange(prefix + "vel_conv", vel_conv, 0.01, 100.0);
-  requireInRange(prefix + "range_conv", range_conv_mm, 0.001, 100.0, "mm/unit");
+  requireInRange(prefix + "range_conv_mm", range_conv_mm, 0.001, 100.0, "mm/unit");
   requireInRange(prefix + "diff_conv", diff_conv, 1e-4, 0.1, "1/mm");
-  requireInRange(prefix + "max_velocity", max_velocity_mps, 0.01, 10.0, "m/s");
-  requireInRange(prefix + "max_rot_velocity", max_rot_velocity_radps, 0.01, 20.0, "rad/s");
+  requireInRange(prefix + "max_velocity_mps", max_velocity_mps, 0.01, 10.0, "m/s");
+  requireInRange(prefix + "max_rot_velocity_radps", max_rot_velocity_radps, 0.01, 20.0, "rad/s");
 }
 
 int wrapDelta15(uint16_t new_value, uint16_t old_value) {

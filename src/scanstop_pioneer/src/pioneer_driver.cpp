@@ -31,20 +31,20 @@ void DriverConfig::validate() const {
   requireOneOf("baud", baud, {9600, 19200, 38400, 57600, 115200});
   robot.validate("robot/");
   motion.validate("motion/");
-  requireInRange("reply_timeout", client.reply_timeout_s, 0.05, 10.0, "s");
+  requireInRange("reply_timeout_s", client.reply_timeout_s, 0.05, 10.0, "s");
   requireInRange("sync_attempts", client.sync_attempts, 1, 20);
-  requireInRange("close_wait", client.close_wait_s, 0.0, 5.0, "s");
-  requireInRange("sip_timeout", sip_timeout_s, 0.2, 10.0, "s");
-  requireInRange("reconnect_period", reconnect_period_s, 0.05, 60.0, "s");
+  requireInRange("close_wait_s", client.close_wait_s, 0.0, 5.0, "s");
+  requireInRange("sip_timeout_s", sip_timeout_s, 0.2, 10.0, "s");
+  requireInRange("reconnect_period_s", reconnect_period_s, 0.05, 60.0, "s");
   // ARIA pulses after 500 ms; P2OS' watchdog stops the drives after 2 s without a packet.
-  requireInRange("pulse_period", pulse_period_s, 0.05, 1.5, "s");
-  requireInRange("cmd_vel_timeout", cmd_vel_timeout_s, 0.05, 10.0, "s");
-  requireInRange("max_linear_speed", max_linear_speed_mps, 0.0, robot.max_velocity_mps, "m/s");
-  requireInRange("max_angular_speed", max_angular_speed_radps, 0.0, robot.max_rot_velocity_radps, "rad/s");
+  requireInRange("pulse_period_s", pulse_period_s, 0.05, 1.5, "s");
+  requireInRange("cmd_vel_timeout_s", cmd_vel_timeout_s, 0.05, 10.0, "s");
+  requireInRange("max_linear_speed_mps", max_linear_speed_mps, 0.0, robot.max_velocity_mps, "m/s");
+  requireInRange("max_angular_speed_radps", max_angular_speed_radps, 0.0, robot.max_rot_velocity_radps, "rad/s");
   // max_linear_speed / max_angular_speed bound every speed the driver commands (sendVelocity clamps
   // to them as well): the motion primitives' cruise speeds must lie within.
-  requireInRange("motion/linear_speed", motion.linear_speed_mps, 0.01, max_linear_speed_mps, "m/s");
-  requireInRange("motion/angular_speed", motion.angular_speed_radps, 0.02, max_angular_speed_radps, "rad/s");
+  requireInRange("motion/linear_speed_mps", motion.linear_speed_mps, 0.01, max_linear_speed_mps, "m/s");
+  requireInRange("motion/angular_speed_radps", motion.angular_speed_radps, 0.02, max_angular_speed_radps, "rad/s");
 }
 
 PioneerDriver::PioneerDriver(const DriverConfig& config) : config_(config), odometry_(config.robot) {

@@ -8,10 +8,10 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "pioneer_driver");
   ros::NodeHandle nh, pnh("~");
   try {
-    double master_timeout = 30.0;
-    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
+    double master_timeout_s = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout_s", master_timeout_s);
     scanstop::pioneer::PioneerDriverNode node(nh, pnh);
-    // The ROS master gone: stop the robot (safety); gone longer than master_timeout: end.
+    // The ROS master gone: stop the robot (safety); gone longer than master_timeout_s: end.
     scanstop::RosMasterWatchdog::Handlers handlers;
     handlers.on_lost = [&node](const std::string& why) { node.onMasterLost(why); };
     handlers.on_back = [&node](const std::string&) { node.onMasterBack(); };
@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
       node.onMasterLost(why);
       ros::requestShutdown();
     };
-    scanstop::RosMasterWatchdog watchdog("pioneer_driver", master_timeout, handlers);
+    scanstop::RosMasterWatchdog watchdog("pioneer_driver", master_timeout_s, handlers);
     // Motions block their service call; the other threads keep cmd_vel and diagnostics going.
     ros::AsyncSpinner spinner(3);
     spinner.start();

@@ -29,22 +29,22 @@ class BadParameters(unittest.TestCase):
             self.assertIn(text, out, 'expected %r in the output for %s:\n%s' % (text, params, out))
 
     def test_negative_speed(self):
-        self.check(1, [('motion/linear_speed', '-1.0')], "'motion/linear_speed' = -1 m/s is out of range [0.01, 1.5 m/s]")
+        self.check(1, [('motion/linear_speed_mps', '-1.0')], "'motion/linear_speed_mps' = -1 m/s is out of range [0.01, 1.5 m/s]")
 
     def test_speed_above_the_bound(self):
-        self.check(2, [('motion/linear_speed', '0.8')], "'motion/linear_speed' = 0.8 m/s is out of range [0.01, 0.5 m/s]")
+        self.check(2, [('motion/linear_speed_mps', '0.8')], "'motion/linear_speed_mps' = 0.8 m/s is out of range [0.01, 0.5 m/s]")
 
     def test_absurd_max_forward(self):
-        self.check(3, [('motion/max_forward', '1000.0')], "'motion/max_forward' = 1000 m is out of range [0.01, 100 m]")
+        self.check(3, [('motion/max_forward_m', '1000.0')], "'motion/max_forward_m' = 1000 m is out of range [0.01, 100 m]")
 
     def test_absurd_max_rotate(self):
-        self.check(4, [('motion/max_rotate', '50.0')], "'motion/max_rotate' = 50 rad is out of range")
+        self.check(4, [('motion/max_rotate_rad', '50.0')], "'motion/max_rotate_rad' = 50 rad is out of range")
 
     def test_negative_cmd_vel_timeout(self):
-        self.check(5, [('cmd_vel_timeout', '-1.0')], "'cmd_vel_timeout' = -1 s is out of range [0.05, 10 s]")
+        self.check(5, [('cmd_vel_timeout_s', '-1.0')], "'cmd_vel_timeout_s' = -1 s is out of range [0.05, 10 s]")
 
     def test_pulse_beyond_the_watchdog(self):
-        self.check(6, [('pulse_period', '3.0')], "'pulse_period' = 3 s is out of range [0.05, 1.5 s]")
+        self.check(6, [('pulse_period_s', '3.0')], "'pulse_period_s' = 3 s is out of range [0.05, 1.5 s]")
 
     def test_baud(self):
         self.check(7, [('baud', '12345')], "'baud' = 12345 must be one of 9600, 19200")
@@ -58,11 +58,11 @@ class BadParameters(unittest.TestCase):
         self.assertIn("required parameter '/bad_pioneer_9/port' is not set", out)
 
     def test_unknown_parameter(self):
-        self.check(11, [('motion/linear_sped', '0.1')], "unknown parameter '/bad_pioneer_11/motion/linear_sped' (did you "
-                   "mean 'motion/linear_speed'?): nothing reads it; pioneer_driver reads ", "motion/max_forward")
+        self.check(11, [('motion/linear_speed', '0.1')], "unknown parameter '/bad_pioneer_11/motion/linear_speed' (did you "
+                   "mean 'motion/linear_speed_mps'?): nothing reads it; pioneer_driver reads ", "motion/max_forward_m")
 
     def test_wrong_type(self):
-        self.check(10, [('sip_timeout', 'long')], "parameter '/bad_pioneer_10/sip_timeout' has the wrong type")
+        self.check(10, [('sip_timeout_s', 'long')], "parameter '/bad_pioneer_10/sip_timeout_s' has the wrong type")
 
 
 if __name__ == '__main__':

@@ -354,7 +354,7 @@ TEST(DriverConfigChecks, MotionSpeedsMustStayWithinTheSpeedBounds) {
     c.validate();
     ADD_FAILURE() << "accepted motion/linear_speed above max_linear_speed";
   } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("'motion/linear_speed' = 0.8 m/s is out of range [0.01, 0.5 m/s]"),
+    EXPECT_NE(std::string(e.what()).find("'motion/linear_speed_mps' = 0.8 m/s is out of range [0.01, 0.5 m/s]"),
               std::string::npos) << e.what();
   }
   c = DriverConfig();
@@ -368,7 +368,7 @@ TEST(DriverConfigChecks, MotionSpeedsMustStayWithinTheSpeedBounds) {
     c.validate();
     ADD_FAILURE() << "accepted a negative cmd_vel_timeout";
   } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("'cmd_vel_timeout' = -1 s is out of range [0.05, 10 s]"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("'cmd_vel_timeout_s' = -1 s is out of range [0.05, 10 s]"), std::string::npos)
         << e.what();
   }
   c = DriverConfig();

@@ -192,27 +192,27 @@ TEST(PioneerDriver, B_ConfigFileEqualsTheCodeDefaults) {
   // A bad value is refused with the parameter's name.
   ros::NodeHandle bad("/bad_pioneer");
   bad.setParam("port", "/dev/null");
-  bad.setParam("motion/linear_speed", -1.0);
+  bad.setParam("motion/linear_speed_mps", -1.0);
   try {
     ros_params::ParamReader bad_params(bad, "pioneer_driver");
     PioneerDriverNode::readParameters(bad_params);
     FAIL() << "expected ConfigError";
   } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("motion/linear_speed"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("motion/linear_speed_mps"), std::string::npos) << e.what();
   }
   // A misspelt parameter: refused, named, with the name it was meant to be.
-  bad.setParam("motion/linear_speed", 0.1);
-  bad.setParam("motion/linear_sped", 0.1);
+  bad.setParam("motion/linear_speed_mps", 0.1);
+  bad.setParam("motion/linear_sped_mps", 0.1);
   ros_params::ParamReader typo_params(bad, "pioneer_driver");
   PioneerDriverNode::readParameters(typo_params);
   ASSERT_EQ(typo_params.unknown().size(), 1u);
-  EXPECT_EQ(typo_params.unknown()[0], "/bad_pioneer/motion/linear_sped");
+  EXPECT_EQ(typo_params.unknown()[0], "/bad_pioneer/motion/linear_sped_mps");
   try {
     typo_params.rejectUnknown();
     FAIL() << "expected ConfigError";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown parameter '/bad_pioneer/motion/linear_sped' (did you mean "
-                                         "'motion/linear_speed'?)"),
+    EXPECT_NE(std::string(e.what()).find("unknown parameter '/bad_pioneer/motion/linear_sped_mps' (did you mean "
+                                         "'motion/linear_speed_mps'?)"),
               std::string::npos)
         << e.what();
   }

@@ -24,16 +24,16 @@ Eigen::Vector3f ScannerConfig::origin(int plane, int planes) const {
 }
 
 void ScannerConfig::validate(const std::string& p) const {
-  requireInRange(p + "height", height_m, 0.05, 3.0, "m");
-  requireInRange(p + "x_offset", x_offset_m, -1.0, 1.0, "m");
-  requireInRange(p + "mount_offset", mount_offset_m, -0.5, 0.5, "m");
-  requireInRange(p + "min_range", min_range_m, 0.0, 1.0, "m");
-  requireInRange(p + "max_range", max_range_m, min_range_m + 0.01, 100.0, "m");
-  requireInRange(p + "plane_time", plane_time_s, 0.001, 10.0, "s");
+  requireInRange(p + "height_m", height_m, 0.05, 3.0, "m");
+  requireInRange(p + "x_offset_m", x_offset_m, -1.0, 1.0, "m");
+  requireInRange(p + "mount_offset_m", mount_offset_m, -0.5, 0.5, "m");
+  requireInRange(p + "min_range_m", min_range_m, 0.0, 1.0, "m");
+  requireInRange(p + "max_range_m", max_range_m, min_range_m + 0.01, 100.0, "m");
+  requireInRange(p + "plane_time_s", plane_time_s, 0.001, 10.0, "s");
   // The candidates for mixed pixels are found from the neighbouring beams: a footprint wider than
   // two beam steps would reach past them.
-  requireInRange(p + "beam_divergence", beam_divergence_rad, 1e-4, 4.0 * M_PI / steps_per_turn, "rad");
-  requireInRange(p + "mixed_pixel_threshold", mixed_pixel_threshold_m, 0.005, 1.0, "m");
+  requireInRange(p + "beam_divergence_rad", beam_divergence_rad, 1e-4, 4.0 * M_PI / steps_per_turn, "rad");
+  requireInRange(p + "mixed_pixel_threshold_m", mixed_pixel_threshold_m, 0.005, 1.0, "m");
   requireInRange(p + "mixed_pixel_samples", mixed_pixel_samples, 2, 8);
   if (first_step < 0 || last_step <= first_step || last_step >= steps_per_turn)
     throw ConfigError(p + "first_step = " + std::to_string(first_step) + ", " + p + "last_step = " +
@@ -47,24 +47,24 @@ void SensorNoiseConfig::validate(const std::string& p) const {
   requireInRange(p + "p_max", p_max, 0.0, 1.0);
   if (p_hit + p_random + p_max <= 0.0)
     throw ConfigError("parameters '" + p + "p_hit' + '" + p + "p_random' + '" + p + "p_max' = 0: their sum must be > 0");
-  requireInRange(p + "sigma_near", sigma_near_m, 0.0, 1.0, "m");
+  requireInRange(p + "sigma_near_m", sigma_near_m, 0.0, 1.0, "m");
   requireInRange(p + "sigma_far_rel", sigma_far_rel, 0.0, 1.0);
   requireInRange(p + "p_plane_loss", p_plane_loss, 0.0, 1.0);
 }
 
 void MotionConfig::validate(const std::string& p, const std::string& sp) const {
-  requireInRange(p + "curvature", curvature_per_m, -1.0, 1.0, "1/m");
-  requireInRange(p + "curvature_sigma", curvature_sigma_per_m, 0.0, 1.0, "1/m");
+  requireInRange(p + "curvature_per_m", curvature_per_m, -1.0, 1.0, "1/m");
+  requireInRange(p + "curvature_sigma_per_m", curvature_sigma_per_m, 0.0, 1.0, "1/m");
   requireInRange(p + "distance_error_rel", distance_error_rel, -0.5, 0.5);
   requireInRange(p + "distance_sigma_rel", distance_sigma_rel, 0.0, 0.5);
-  requireInRange(p + "finish_angle", finish_angle_rad, -0.5, 0.5, "rad");
-  requireInRange(p + "finish_angle_sigma", finish_angle_sigma_rad, 0.0, 0.5, "rad");
+  requireInRange(p + "finish_angle_rad", finish_angle_rad, -0.5, 0.5, "rad");
+  requireInRange(p + "finish_angle_sigma_rad", finish_angle_sigma_rad, 0.0, 0.5, "rad");
   requireInRange(p + "rotation_error_rel", rotation_error_rel, -0.5, 0.5);
   requireInRange(p + "rotation_sigma_rel", rotation_sigma_rel, 0.0, 0.5);
-  requireInRange(p + "rotation_position_sigma", rotation_position_sigma_m_per_rad, 0.0, 1.0, "m/rad");
+  requireInRange(p + "rotation_position_sigma_m_per_rad", rotation_position_sigma_m_per_rad, 0.0, 1.0, "m/rad");
   // A Pioneer 2 DX drives at most 1.5 m/s and turns at most 500 deg/s (8.7 rad/s).
-  requireInRange(sp + "linear_speed", linear_speed_mps, 0.01, 1.5, "m/s");
-  requireInRange(sp + "angular_speed", angular_speed_radps, 0.01, 8.7, "rad/s");
+  requireInRange(sp + "linear_speed_mps", linear_speed_mps, 0.01, 1.5, "m/s");
+  requireInRange(sp + "angular_speed_radps", angular_speed_radps, 0.01, 8.7, "rad/s");
 }
 
 ErrorProfile makeProfile(const std::string& name) {

@@ -38,7 +38,7 @@ nav_msgs::Odometry odometryMsg(const Pose2D& pose, const std::string& frame, con
 
 SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   ros_params::ParamReader params(pnh, "sim_node");
-  params.known({"master_timeout", "end_launch_on_setup_error"});  // main()'s
+  params.known({"master_timeout_s", "end_launch_on_setup_error"});  // main()'s
   const std::string world_path = params.require<std::string>("world");
   WorldOptions world_options;
   bool allow_no_floor = false;
@@ -61,15 +61,15 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   config.seed = static_cast<uint64_t>(seed);
   // Every model field can be overridden by a parameter of the same name (config/sim.yaml).
   ScannerConfig& sc = config.scanner;
-  params.optional("scanner/height", sc.height_m);
-  params.optional("scanner/x_offset", sc.x_offset_m);
-  params.optional("scanner/mount_offset", sc.mount_offset_m);
-  params.optional("scanner/min_range", sc.min_range_m);
-  params.optional("scanner/max_range", sc.max_range_m);
-  params.optional("scanner/plane_time", sc.plane_time_s);
+  params.optional("scanner/height_m", sc.height_m);
+  params.optional("scanner/x_offset_m", sc.x_offset_m);
+  params.optional("scanner/mount_offset_m", sc.mount_offset_m);
+  params.optional("scanner/min_range_m", sc.min_range_m);
+  params.optional("scanner/max_range_m", sc.max_range_m);
+  params.optional("scanner/plane_time_s", sc.plane_time_s);
   params.optional("scanner/mixed_pixels", sc.mixed_pixels);
-  params.optional("scanner/beam_divergence", sc.beam_divergence_rad);
-  params.optional("scanner/mixed_pixel_threshold", sc.mixed_pixel_threshold_m);
+  params.optional("scanner/beam_divergence_rad", sc.beam_divergence_rad);
+  params.optional("scanner/mixed_pixel_threshold_m", sc.mixed_pixel_threshold_m);
   params.optional("scanner/mixed_pixel_samples", sc.mixed_pixel_samples);
   // The selected profile's values from config/sim.yaml (profiles/<name>/sensor|motion/...). The
   // other profiles there are read too (into a scratch copy): their names are checked the same way.
@@ -78,19 +78,19 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     params.optional(pp + "sensor/p_hit", sn.p_hit);
     params.optional(pp + "sensor/p_random", sn.p_random);
     params.optional(pp + "sensor/p_max", sn.p_max);
-    params.optional(pp + "sensor/sigma_near", sn.sigma_near_m);
+    params.optional(pp + "sensor/sigma_near_m", sn.sigma_near_m);
     params.optional(pp + "sensor/sigma_far_rel", sn.sigma_far_rel);
     params.optional(pp + "sensor/p_plane_loss", sn.p_plane_loss);
     MotionConfig& mo = errors.motion;
-    params.optional(pp + "motion/curvature", mo.curvature_per_m);
-    params.optional(pp + "motion/curvature_sigma", mo.curvature_sigma_per_m);
+    params.optional(pp + "motion/curvature_per_m", mo.curvature_per_m);
+    params.optional(pp + "motion/curvature_sigma_per_m", mo.curvature_sigma_per_m);
     params.optional(pp + "motion/distance_error_rel", mo.distance_error_rel);
     params.optional(pp + "motion/distance_sigma_rel", mo.distance_sigma_rel);
-    params.optional(pp + "motion/finish_angle", mo.finish_angle_rad);
-    params.optional(pp + "motion/finish_angle_sigma", mo.finish_angle_sigma_rad);
+    params.optional(pp + "motion/finish_angle_rad", mo.finish_angle_rad);
+    params.optional(pp + "motion/finish_angle_sigma_rad", mo.finish_angle_sigma_rad);
     params.optional(pp + "motion/rotation_error_rel", mo.rotation_error_rel);
     params.optional(pp + "motion/rotation_sigma_rel", mo.rotation_sigma_rel);
-    params.optional(pp + "motion/rotation_position_sigma", mo.rotation_position_sigma_m_per_rad);
+    params.optional(pp + "motion/rotation_position_sigma_m_per_rad", mo.rotation_position_sigma_m_per_rad);
   };
   const std::string pp = "profiles/" + profile + "/";
   XmlRpc::XmlRpcValue profiles;
@@ -102,20 +102,20 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
       }
   read_profile(pp, config.errors);
   MotionConfig& mo = config.errors.motion;
-  params.optional("motion/linear_speed", mo.linear_speed_mps);
-  params.optional("motion/angular_speed", mo.angular_speed_radps);
+  params.optional("motion/linear_speed_mps", mo.linear_speed_mps);
+  params.optional("motion/angular_speed_radps", mo.angular_speed_radps);
   // The body (robot_body/..., config/robot_body.yaml): the collision disc and the height up to
   // which the world's geometry blocks it. ~robot_radius overrides the disc (a WARN names both).
   const RobotBody body = ros_params::readRobotBody(nh);
   config.robot_radius_m = body.radius_m;
   world_options.obstacle_max_z_m = body.height_m;
-  if (params.has("robot_radius")) {
-    params.optional("robot_radius", config.robot_radius_m);
+  if (params.has("robot_radius_m")) {
+    params.optional("robot_radius_m", config.robot_radius_m);
     ROS_WARN("sim_node: %s = %.3f m overrides the robot body's radius %.3f m (config/robot_body.yaml)",
-             pnh.resolveName("robot_radius").c_str(), config.robot_radius_m, body.radius_m);
+             pnh.resolveName("robot_radius_m").c_str(), config.robot_radius_m, body.radius_m);
   }
-  params.optional("max_forward", config.max_forward_m);
-  params.optional("max_rotate", config.max_rotate_rad);
+  params.optional("max_forward_m", config.max_forward_m);
+  params.optional("max_rotate_rad", config.max_rotate_rad);
   params.optional("outlier_filter", config.outlier_filter);
   try {
     config.validate(pp);

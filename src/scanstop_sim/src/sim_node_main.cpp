@@ -12,10 +12,10 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "sim_node");
   ros::NodeHandle nh, pnh("~");
   try {
-    double master_timeout = 30.0;
-    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
+    double master_timeout_s = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout_s", master_timeout_s);
     scanstop::sim::SimNode node(nh, pnh);
-    // The ROS master gone: refuse motions (the robot stands); gone longer than master_timeout: end.
+    // The ROS master gone: refuse motions (the robot stands); gone longer than master_timeout_s: end.
     scanstop::RosMasterWatchdog::Handlers handlers;
     handlers.on_lost = [&node](const std::string& why) { node.onMasterLost(why); };
     handlers.on_back = [&node](const std::string&) { node.onMasterBack(); };
@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
       node.onMasterLost(why);
       ros::requestShutdown();
     };
-    scanstop::RosMasterWatchdog watchdog("sim_node", master_timeout, handlers);
+    scanstop::RosMasterWatchdog watchdog("sim_node", master_timeout_s, handlers);
     // Several threads: a scan request during a (wall-clock timed) motion is answered at once.
     ros::AsyncSpinner spinner(3);
     spinner.start();

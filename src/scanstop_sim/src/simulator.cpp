@@ -27,10 +27,10 @@ void SimConfig::validate(const std::string& profile_prefix) const {
   scanner.validate("scanner/");
   errors.sensor.validate(profile_prefix + "sensor/");
   errors.motion.validate(profile_prefix + "motion/", "motion/");
-  requireInRange("robot_radius", robot_radius_m, 0.05, 2.0, "m");
+  requireInRange("robot_radius_m", robot_radius_m, 0.05, 2.0, "m");
   requireInRange("collision_step", collision_step_m, 0.0005, 0.1, "m");
-  requireInRange("max_forward", max_forward_m, 0.1, 100.0, "m");
-  requireInRange("max_rotate", max_rotate_rad, 0.1, 4.0 * M_PI, "rad");
+  requireInRange("max_forward_m", max_forward_m, 0.1, 100.0, "m");
+  requireInRange("max_rotate_rad", max_rotate_rad, 0.1, 4.0 * M_PI, "rad");
 }
 
 namespace {
@@ -87,13 +87,13 @@ std::string checkScanPlanes(long planes) {
 std::string checkRotation(double angle_rad, double max_rotate_rad) {
   if (std::isfinite(angle_rad) && std::abs(angle_rad) <= max_rotate_rad) return "";
   return "angle_rad = " + num(angle_rad) + " must be finite and within [-" + num(max_rotate_rad) + ", " +
-         num(max_rotate_rad) + "] rad (parameter max_rotate)";
+         num(max_rotate_rad) + "] rad (parameter max_rotate_rad)";
 }
 
 std::string checkForward(double distance_m, double max_forward_m) {
   if (std::isfinite(distance_m) && std::abs(distance_m) <= max_forward_m) return "";
   return "distance_m = " + num(distance_m) + " must be finite and within [-" + num(max_forward_m) + ", " +
-         num(max_forward_m) + "] m (parameter max_forward)";
+         num(max_forward_m) + "] m (parameter max_forward_m)";
 }
 
 std::string checkStartPose(const Pose2D& pose, const World& world, double robot_radius_m) {

@@ -37,27 +37,27 @@ class BadParameters(unittest.TestCase):
             self.assertIn(text, out, 'expected %r in the output for %s:\n%s' % (text, params, out))
 
     def test_scanner_height_out_of_range(self):
-        self.check(1, [('scanner/height', '7.0')], "'scanner/height' = 7 m is out of range [0.05, 3 m]")
+        self.check(1, [('scanner/height_m', '7.0')], "'scanner/height_m' = 7 m is out of range [0.05, 3 m]")
 
     def test_negative_plane_time(self):
-        self.check(2, [('scanner/plane_time', '-0.1')], "'scanner/plane_time' = -0.1 s is out of range [0.001, 10 s]")
+        self.check(2, [('scanner/plane_time_s', '-0.1')], "'scanner/plane_time_s' = -0.1 s is out of range [0.001, 10 s]")
 
     def test_absurd_max_forward(self):
-        self.check(3, [('max_forward', '1000.0')], "'max_forward' = 1000 m is out of range [0.1, 100 m]")
+        self.check(3, [('max_forward_m', '1000.0')], "'max_forward_m' = 1000 m is out of range [0.1, 100 m]")
 
     def test_absurd_max_rotate(self):
-        self.check(4, [('max_rotate', '50.0')], "'max_rotate' = 50 rad is out of range")
+        self.check(4, [('max_rotate_rad', '50.0')], "'max_rotate_rad' = 50 rad is out of range")
 
     def test_speed_beyond_the_pioneer(self):
-        self.check(5, [('motion/linear_speed', '20.0')], "'motion/linear_speed' = 20 m/s is out of range [0.01, 1.5 m/s]")
+        self.check(5, [('motion/linear_speed_mps', '20.0')], "'motion/linear_speed_mps' = 20 m/s is out of range [0.01, 1.5 m/s]")
 
     def test_profile_value_names_the_profile_parameter(self):
         self.check(6, [('error_profile', 'thesis'), ('profiles/thesis/sensor/p_hit', '-1.0')],
                    "'profiles/thesis/sensor/p_hit' = -1 is out of range [0, 1]")
 
     def test_unknown_parameter(self):
-        self.check(16, [('scanner/heigth', '0.45')], "unknown parameter '/bad_sim_node_16/scanner/heigth' (did you mean "
-                   "'scanner/height'?): nothing reads it; sim_node reads ", "scanner/max_range")
+        self.check(16, [('scanner/height', '0.45')], "unknown parameter '/bad_sim_node_16/scanner/height' (did you mean "
+                   "'scanner/height_m'?): nothing reads it; sim_node reads ", "scanner/max_range_m")
 
     def test_misspelt_profile_value(self):
         self.check(17, [('profiles/perfect/sensor/p_hti', '1.0')], "unknown parameter '/bad_sim_node_17/profiles/perfect/"

@@ -491,7 +491,7 @@ TEST(RequestChecks, ForwardNaNInfAndAbsurdDistancesAreRefused) {
   for (double bad : {std::nan(""), double(INFINITY), -double(INFINITY), 100.0, -100.0, 5.001}) {
     const std::string m = checkForward(bad, 5.0);
     EXPECT_NE(m.find("distance_m"), std::string::npos) << bad;
-    EXPECT_NE(m.find("[-5, 5] m (parameter max_forward)"), std::string::npos) << m;
+    EXPECT_NE(m.find("[-5, 5] m (parameter max_forward_m)"), std::string::npos) << m;
   }
 }
 
@@ -608,28 +608,28 @@ TEST(ConfigChecks, BadValuesNameTheSimNodeParameter) {
   SimConfig c;
   EXPECT_EQ(message(c, "profiles/thesis/"), "");
   c.scanner.height_m = 7.0;
-  EXPECT_NE(message(c, "").find("'scanner/height' = 7 m is out of range [0.05, 3 m]"), std::string::npos) << message(c, "");
+  EXPECT_NE(message(c, "").find("'scanner/height_m' = 7 m is out of range [0.05, 3 m]"), std::string::npos) << message(c, "");
   c = SimConfig();
   c.scanner.plane_time_s = -0.1;
-  EXPECT_NE(message(c, "").find("scanner/plane_time"), std::string::npos);
+  EXPECT_NE(message(c, "").find("scanner/plane_time_s"), std::string::npos);
   c = SimConfig();
   c.errors.sensor.p_hit = std::nan("");
   EXPECT_NE(message(c, "profiles/thesis/").find("'profiles/thesis/sensor/p_hit' = nan"), std::string::npos);
   c = SimConfig();
   c.errors.motion.curvature_per_m = 3.0;
-  EXPECT_NE(message(c, "profiles/perfect/").find("'profiles/perfect/motion/curvature' = 3"), std::string::npos);
+  EXPECT_NE(message(c, "profiles/perfect/").find("'profiles/perfect/motion/curvature_per_m' = 3"), std::string::npos);
   c = SimConfig();
   c.errors.motion.linear_speed_mps = 20.0;
-  EXPECT_NE(message(c, "").find("'motion/linear_speed' = 20 m/s is out of range [0.01, 1.5 m/s]"), std::string::npos);
+  EXPECT_NE(message(c, "").find("'motion/linear_speed_mps' = 20 m/s is out of range [0.01, 1.5 m/s]"), std::string::npos);
   c = SimConfig();
   c.max_forward_m = 1000.0;
-  EXPECT_NE(message(c, "").find("'max_forward' = 1000 m"), std::string::npos);
+  EXPECT_NE(message(c, "").find("'max_forward_m' = 1000 m"), std::string::npos);
   c = SimConfig();
   c.max_rotate_rad = 50.0;
-  EXPECT_NE(message(c, "").find("'max_rotate' = 50 rad"), std::string::npos);
+  EXPECT_NE(message(c, "").find("'max_rotate_rad' = 50 rad"), std::string::npos);
   c = SimConfig();
   c.robot_radius_m = -1.0;
-  EXPECT_NE(message(c, "").find("'robot_radius' = -1 m"), std::string::npos);
+  EXPECT_NE(message(c, "").find("'robot_radius_m' = -1 m"), std::string::npos);
 }
 
 }  // namespace
@@ -997,10 +997,10 @@ TEST(SimArtifacts, MixedPixelParametersAreValidatedByName) {
   c.scanner.mixed_pixels = true;
   EXPECT_EQ(message(c), "");
   c.scanner.beam_divergence_rad = 0.1;
-  EXPECT_NE(message(c).find("'scanner/beam_divergence' = 0.1 rad"), std::string::npos) << message(c);
+  EXPECT_NE(message(c).find("'scanner/beam_divergence_rad' = 0.1 rad"), std::string::npos) << message(c);
   c = SimConfig();
   c.scanner.mixed_pixel_threshold_m = std::nan("");
-  EXPECT_NE(message(c).find("'scanner/mixed_pixel_threshold' = nan"), std::string::npos) << message(c);
+  EXPECT_NE(message(c).find("'scanner/mixed_pixel_threshold_m' = nan"), std::string::npos) << message(c);
   c = SimConfig();
   c.scanner.mixed_pixel_samples = 1;
   EXPECT_NE(message(c).find("'scanner/mixed_pixel_samples' = 1"), std::string::npos) << message(c);

@@ -21,7 +21,7 @@ VoxelMap::VoxelMap(double voxel_m, int max_points_per_voxel, double min_spacing_
       max_per_voxel_(max_points_per_voxel),
       min_spacing2_(static_cast<float>(min_spacing_m * min_spacing_m)) {
   requirePositive("voxel", voxel_m, "m");
-  requireInRange("map_spacing", min_spacing_m, 0.0, voxel_m, "m");
+  requireInRange("map_spacing_m", min_spacing_m, 0.0, voxel_m, "m");
   if (max_points_per_voxel < 1) throw ConfigError("max_points_per_voxel must be >= 1");
 }
 
@@ -347,17 +347,17 @@ std::vector<Eigen::Vector3f> VoxelMap::points() const {
 }
 
 void IcpConfig::validate() const {
-  requireInRange("c_max", c_max_m, 0.001, 5.0, "m");
-  requireInRange("t_c", t_c_m, 1e-9, 1.0, "m");
-  requireInRange("r_c", r_c_rad, 1e-9, 1.0, "rad");
+  requireInRange("c_max_m", c_max_m, 0.001, 5.0, "m");
+  requireInRange("t_c_m", t_c_m, 1e-9, 1.0, "m");
+  requireInRange("r_c_rad", r_c_rad, 1e-9, 1.0, "rad");
   requireInRange("max_iterations", max_iterations, 1, 10000);
   requireInRange("min_correspondences", min_correspondences, 3, 1e9);
   requireInRange("min_overlap", min_overlap, 0.0, 1.0);
-  requirePositive("max_correction", max_correction_m, "m");
-  requirePositive("max_correction_angle", max_correction_rad, "rad");
+  requirePositive("max_correction_m", max_correction_m, "m");
+  requirePositive("max_correction_rad", max_correction_rad, "rad");
   requireInRange("degeneracy_ratio", degeneracy_ratio, 0.0, 1.0);
   requireInRange("information_points", information_points, 1e-6, 1e6);
-  requireInRange("information_sigma", information_sigma_m, 1e-6, 1.0, "m");
+  requireInRange("information_sigma_m", information_sigma_m, 1e-6, 1.0, "m");
 }
 
 namespace {

@@ -13,37 +13,37 @@ namespace slam {
 
 void SlamConfig::validate() const {
   icp.validate();
-  requireInRange("coarse_c_max", coarse_c_max_m, 0.0, 5.0, "m");
-  requireInRange("source_voxel", source_voxel_m, 0.0, 1.0, "m");
-  requireInRange("refine_t_c", refine_t_c_m, 0.0, 0.01, "m");
-  requireInRange("refine_r_c", refine_r_c_rad, 1e-9, 0.01, "rad");
+  requireInRange("coarse_c_max_m", coarse_c_max_m, 0.0, 5.0, "m");
+  requireInRange("source_voxel_m", source_voxel_m, 0.0, 1.0, "m");
+  requireInRange("refine_t_c_m", refine_t_c_m, 0.0, 0.01, "m");
+  requireInRange("refine_r_c_rad", refine_r_c_rad, 1e-9, 0.01, "rad");
   requireInRange("refine_max_iterations", refine_max_iterations, 1, 10000);
-  requireInRange("refine_source_voxel", refine_source_voxel_m, 0.0, 1.0, "m");
-  requireInRange("refine_max_correction", refine_max_correction_m, 0.0, 10.0, "m");
-  requireInRange("refine_max_correction_angle", refine_max_correction_rad, 0.0, M_PI, "rad");
+  requireInRange("refine_source_voxel_m", refine_source_voxel_m, 0.0, 1.0, "m");
+  requireInRange("refine_max_correction_m", refine_max_correction_m, 0.0, 10.0, "m");
+  requireInRange("refine_max_correction_rad", refine_max_correction_rad, 0.0, M_PI, "rad");
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
-  requireInRange("map_spacing", map_spacing_m, 0.0, icp.c_max_m, "m");
-  requireInRange("odom_scale_min_travel", odom_scale_min_travel_m, 0.01, 100.0, "m");
-  requireInRange("prior_sigma", prior_sigma_m, 1e-6, 10.0, "m");
+  requireInRange("map_spacing_m", map_spacing_m, 0.0, icp.c_max_m, "m");
+  requireInRange("odom_scale_min_travel_m", odom_scale_min_travel_m, 0.01, 100.0, "m");
+  requireInRange("prior_sigma_m", prior_sigma_m, 1e-6, 10.0, "m");
   requireInRange("prior_sigma_per_m", prior_sigma_per_m, 0.0, 1.0);
-  requireInRange("prior_sigma_angle", prior_sigma_rad, 1e-6, M_PI, "rad");
-  requireInRange("prior_sigma_angle_per_rad", prior_sigma_rad_per_rad, 0.0, 1.0);
-  requireInRange("prior_sigma_angle_per_m", prior_sigma_rad_per_m, 0.0, 1.0, "rad/m");
+  requireInRange("prior_sigma_rad", prior_sigma_rad, 1e-6, M_PI, "rad");
+  requireInRange("prior_sigma_rad_per_rad", prior_sigma_rad_per_rad, 0.0, 1.0);
+  requireInRange("prior_sigma_rad_per_m", prior_sigma_rad_per_m, 0.0, 1.0, "rad/m");
   requireInRange("prior_gate", prior_gate, 1e-6, 1e6);
   requireInRange("odometry_gate", odometry_gate, 0.0, 1e6);
   requireInRange("odometry_gate_rms_ratio", odometry_gate_rms_ratio, 1.0, 100.0);
   requireInRange("failure_retry_degeneracy_ratio", failure_retry_degeneracy_ratio, 0.0, 1.0);
-  requireInRange("max_point_distance", max_point_distance_m, 0.1, 10000.0, "m");
-  requireInRange("max_odom_jump", max_odom_jump_m, 0.01, 100000.0, "m");
+  requireInRange("max_point_distance_m", max_point_distance_m, 0.1, 10000.0, "m");
+  requireInRange("max_odom_jump_m", max_odom_jump_m, 0.01, 100000.0, "m");
   requireInRange("relax_neighbours", relax_neighbours, 0, 100);
   requireInRange("relax_loop_candidates", relax_loop_candidates, 0, 100);
   requireInRange("relax_loop_min_gap", relax_loop_min_gap, 2, 100000);
-  requireInRange("relax_max_distance", relax_max_distance_m, 1e-6, 1000.0, "m");
-  requireInRange("relax_voxel", relax_voxel_m, 0.01, 1.0, "m");
+  requireInRange("relax_max_distance_m", relax_max_distance_m, 1e-6, 1000.0, "m");
+  requireInRange("relax_voxel_m", relax_voxel_m, 0.01, 1.0, "m");
   requireInRange("relax_min_overlap", relax_min_overlap, 0.0, 1.0);
-  requireInRange("relax_max_rms", relax_max_rms_m, 1e-6, 1.0, "m");
-  requireInRange("relax_update", relax_update_m, 0.0, 10.0, "m");
-  requireInRange("relax_update_angle", relax_update_rad, 0.0, M_PI, "rad");
+  requireInRange("relax_max_rms_m", relax_max_rms_m, 1e-6, 1.0, "m");
+  requireInRange("relax_update_m", relax_update_m, 0.0, 10.0, "m");
+  requireInRange("relax_update_rad", relax_update_rad, 0.0, M_PI, "rad");
   graph.validate();
 }
 
@@ -90,7 +90,7 @@ std::string scanProblem(const PointCloud& scan_base, double max_point_distance_m
     where << "point " << i << " (" << p.x() << ", " << p.y() << ", " << p.z() << ")";
     if (!p.allFinite()) return where.str() + " has an infinite coordinate";
     if (p.cast<double>().norm() > max_point_distance_m)
-      return where.str() + " is " + std::to_string(p.norm()) + " m from base_link, beyond max_point_distance " +
+      return where.str() + " is " + std::to_string(p.norm()) + " m from base_link, beyond max_point_distance_m " +
              std::to_string(max_point_distance_m) + " m";
     ++finite;
   }
@@ -414,7 +414,7 @@ std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
   const double jump = std::hypot(odom_pose.x - last_odom_.x, odom_pose.y - last_odom_.y);
   if (jump > config_.max_odom_jump_m)
     return "the odometry pose " + odom_pose.toString() + " is " + std::to_string(jump) +
-           " m from the last scan's " + last_odom_.toString() + ", beyond max_odom_jump " +
+           " m from the last scan's " + last_odom_.toString() + ", beyond max_odom_jump_m " +
            std::to_string(config_.max_odom_jump_m) + " m (an odometry reset or a corrupt pose)";
   return "";
 }

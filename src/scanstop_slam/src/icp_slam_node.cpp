@@ -33,8 +33,8 @@ class IcpSlamNode {
     SlamConfig config;
     ros_params::ParamReader params(pnh, "icp_slam_node");
     const auto optional = [&](const std::string& name, auto& value) { params.optional(name, value); };
-    double master_timeout = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
-    optional("master_timeout", master_timeout);
+    double master_timeout_s = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
+    optional("master_timeout_s", master_timeout_s);
     bool end_launch = false;  // read by main() after a start-up error; a known name here
     optional("end_launch_on_setup_error", end_launch);
     std::string mode = "3dof";
@@ -48,61 +48,61 @@ class IcpSlamNode {
     optional("degeneracy_remap", config.icp.degeneracy_remap);
     optional("prior_all_directions", config.icp.prior_all_directions);
     optional("information_points", config.icp.information_points);
-    optional("information_sigma", config.icp.information_sigma_m);
+    optional("information_sigma_m", config.icp.information_sigma_m);
     optional("odometry_prior", config.odometry_prior);
-    optional("prior_sigma", config.prior_sigma_m);
+    optional("prior_sigma_m", config.prior_sigma_m);
     optional("prior_sigma_per_m", config.prior_sigma_per_m);
     params.degrees("prior_sigma_deg", config.prior_sigma_rad, 1e-4, 180.0);
-    optional("prior_sigma_angle_per_rad", config.prior_sigma_rad_per_rad);
+    optional("prior_sigma_rad_per_rad", config.prior_sigma_rad_per_rad);
     optional("prior_gate", config.prior_gate);
     optional("odometry_gate", config.odometry_gate);
     optional("odometry_gate_rms_ratio", config.odometry_gate_rms_ratio);
     optional("failure_retry_degeneracy_ratio", config.failure_retry_degeneracy_ratio);
     params.degrees("prior_sigma_deg_per_m", config.prior_sigma_rad_per_m, 0.0, 57.0);
-    optional("c_max", config.icp.c_max_m);
-    optional("t_c", config.icp.t_c_m);
+    optional("c_max_m", config.icp.c_max_m);
+    optional("t_c_m", config.icp.t_c_m);
     params.degrees("r_c_deg", config.icp.r_c_rad, 1e-7, 45.0);
     optional("max_iterations", config.icp.max_iterations);
     optional("min_correspondences", config.icp.min_correspondences);
     optional("min_overlap", config.icp.min_overlap);
-    optional("max_correction", config.icp.max_correction_m);
-    optional("max_correction_angle", config.icp.max_correction_rad);
-    optional("source_voxel", config.source_voxel_m);
+    optional("max_correction_m", config.icp.max_correction_m);
+    optional("max_correction_rad", config.icp.max_correction_rad);
+    optional("source_voxel_m", config.source_voxel_m);
     optional("source_centroids", config.source_centroids);
     optional("odom_scale_estimation", config.odom_scale_estimation);
-    optional("odom_scale_min_travel", config.odom_scale_min_travel_m);
+    optional("odom_scale_min_travel_m", config.odom_scale_min_travel_m);
     optional("max_points_per_voxel", config.max_points_per_voxel);
-    optional("map_spacing", config.map_spacing_m);
-    optional("coarse_c_max", config.coarse_c_max_m);
+    optional("map_spacing_m", config.map_spacing_m);
+    optional("coarse_c_max_m", config.coarse_c_max_m);
     optional("coarse_point_to_point", config.coarse_point_to_point);
-    optional("refine_t_c", config.refine_t_c_m);
+    optional("refine_t_c_m", config.refine_t_c_m);
     params.degrees("refine_r_c_deg", config.refine_r_c_rad, 1e-7, 0.5);
     optional("refine_max_iterations", config.refine_max_iterations);
-    optional("refine_source_voxel", config.refine_source_voxel_m);
-    optional("refine_max_correction", config.refine_max_correction_m);
+    optional("refine_source_voxel_m", config.refine_source_voxel_m);
+    optional("refine_max_correction_m", config.refine_max_correction_m);
     params.degrees("refine_max_correction_deg", config.refine_max_correction_rad, 0.0, 180.0);
     optional("same_side", config.icp.same_side);
     optional("accelerate", config.icp.accelerate);
     optional("ignore_horizontal", config.icp.ignore_horizontal);
-    optional("max_point_distance", config.max_point_distance_m);
-    optional("max_odom_jump", config.max_odom_jump_m);
+    optional("max_point_distance_m", config.max_point_distance_m);
+    optional("max_odom_jump_m", config.max_odom_jump_m);
     // Global relaxation (SlamConfig::relax*, icp_slam.h).
     optional("relax", config.relax);
     optional("relax_neighbours", config.relax_neighbours);
     optional("relax_loop_candidates", config.relax_loop_candidates);
     optional("relax_loop_min_gap", config.relax_loop_min_gap);
-    optional("relax_max_distance", config.relax_max_distance_m);
-    optional("relax_voxel", config.relax_voxel_m);
+    optional("relax_max_distance_m", config.relax_max_distance_m);
+    optional("relax_voxel_m", config.relax_voxel_m);
     optional("relax_min_overlap", config.relax_min_overlap);
-    optional("relax_max_rms", config.relax_max_rms_m);
-    optional("relax_update", config.relax_update_m);
+    optional("relax_max_rms_m", config.relax_max_rms_m);
+    optional("relax_update_m", config.relax_update_m);
     params.degrees("relax_update_deg", config.relax_update_rad, 0.0, 180.0);
     optional("relax_loss", config.graph.loss);
     optional("relax_loss_scale", config.graph.loss_scale);
     optional("max_cloud_points", max_cloud_points_);
-    optional("map_cloud_voxel", map_cloud_voxel_m_);
-    optional("map_cloud_max_z", map_cloud_max_z_m_);
-    optional("sensor_height", sensor_height_m_);
+    optional("map_cloud_voxel_m", map_cloud_voxel_m_);
+    optional("map_cloud_max_z_m", map_cloud_max_z_m_);
+    optional("sensor_height_m", sensor_height_m_);
     optional("map_frame", map_frame_);
     optional("odom_frame", odom_frame_);
     optional("base_frame", base_frame_);
@@ -114,9 +114,9 @@ class IcpSlamNode {
     try {
       config.validate();
       requireInRange("max_cloud_points", max_cloud_points_, 1, 1e8);
-      requireInRange("map_cloud_voxel", map_cloud_voxel_m_, 0.0, 10.0, "m");
-      requireInRange("map_cloud_max_z", map_cloud_max_z_m_, 0.1, 1000.0, "m");
-      requireInRange("sensor_height", sensor_height_m_, -10.0, 10.0, "m");
+      requireInRange("map_cloud_voxel_m", map_cloud_voxel_m_, 0.0, 10.0, "m");
+      requireInRange("map_cloud_max_z_m", map_cloud_max_z_m_, 0.1, 1000.0, "m");
+      requireInRange("sensor_height_m", sensor_height_m_, -10.0, 10.0, "m");
     } catch (const ConfigError& e) {
       throw ConfigError(std::string(e.what()) + " (in namespace " + pnh.getNamespace() + ")");
     }
@@ -342,12 +342,12 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "icp_slam_node");
   ros::NodeHandle nh, pnh("~");
   try {
-    double master_timeout = 30.0;
-    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
+    double master_timeout_s = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout_s", master_timeout_s);
     scanstop::slam::IcpSlamNode node(nh, pnh);
-    // The ROS master gone: ERROR once; gone longer than master_timeout (or a new master): end
+    // The ROS master gone: ERROR once; gone longer than master_timeout_s (or a new master): end
     // (the map directory is on disk after every scan: a restarted node reloads it).
-    scanstop::RosMasterWatchdog watchdog("icp_slam_node", master_timeout);
+    scanstop::RosMasterWatchdog watchdog("icp_slam_node", master_timeout_s);
     ros::spin();
     if (watchdog.ended()) return 1;
   } catch (const std::exception& e) {

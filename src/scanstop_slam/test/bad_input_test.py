@@ -170,20 +170,21 @@ class SlamBadInput(unittest.TestCase):
             self.assertIn(text, out, 'expected %r for %s:\n%s' % (text, params, out))
 
     def test_2_bad_parameters_stop_the_node(self):
-        self.check_bad_param(1, [('c_max', '-0.1')], "'c_max' = -0.1 m is out of range [0.001, 5 m]")
+        self.check_bad_param(1, [('c_max_m', '-0.1')], "'c_max_m' = -0.1 m is out of range [0.001, 5 m]")
         self.check_bad_param(2, [('max_iterations', '0')], "'max_iterations' = 0 is out of range [1, 10000]")
         self.check_bad_param(3, [('min_overlap', '1.5')], "'min_overlap' = 1.5 is out of range [0, 1]")
-        self.check_bad_param(4, [('max_odom_jump', '-5')], "'max_odom_jump' = -5 m is out of range [0.01, 100000 m]")
-        self.check_bad_param(5, [('max_point_distance', '0.0')],
-                             "'max_point_distance' = 0 m is out of range [0.1, 10000 m]")
+        self.check_bad_param(4, [('max_odom_jump_m', '-5')], "'max_odom_jump_m' = -5 m is out of range [0.01, 100000 m]")
+        self.check_bad_param(5, [('max_point_distance_m', '0.0')],
+                             "'max_point_distance_m' = 0 m is out of range [0.1, 10000 m]")
         self.check_bad_param(6, [('r_c_deg', '90')], "'/bad_slam_6/r_c_deg' = 90 deg is out of range [1e-07, 45 deg]")
-        self.check_bad_param(7, [('sensor_height', '50')], "'sensor_height' = 50 m is out of range [-10, 10 m]")
+        self.check_bad_param(7, [('sensor_height_m', '50')], "'sensor_height_m' = 50 m is out of range [-10, 10 m]")
         self.check_bad_param(8, [('mode', '4dof')], "'/bad_slam_8/mode' = '4dof' must be 3dof or 6dof")
         self.check_bad_param(9, [('map_frame', 'odom')], "map_frame' and", "odom_frame' are both 'odom'")
         self.check_bad_param(10, [('base_frame', '')], "'/bad_slam_10/base_frame' = ''")
-        self.check_bad_param(11, [('c_max', 'wide')], "parameter '/bad_slam_11/c_max' has the wrong type")
+        self.check_bad_param(11, [('c_max_m', 'wide')], "parameter '/bad_slam_11/c_max_m' has the wrong type")
         self.check_bad_param(12, [('max_cloud_points', '0')], "'max_cloud_points' = 0 is out of range [1, 1e+08]")
-        self.check_bad_param(13, [('c_maxx', '0.5')], "unknown parameter '/bad_slam_13/c_maxx' (did you mean 'c_max'?): "
+        # The name before its unit was in it: refused, with the new name.
+        self.check_bad_param(13, [('c_max', '0.5')], "unknown parameter '/bad_slam_13/c_max' (did you mean 'c_max_m'?): "
                              "nothing reads it; icp_slam_node reads ", "refine_r_c_deg")
 
     def test_3_corrupt_scan_files_are_skipped_by_name(self):

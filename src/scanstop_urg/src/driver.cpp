@@ -18,8 +18,8 @@ void DriverConfig::validate() const {
     if (baud.second <= 0 || !isSupportedBaud(baud.second))
       throw ConfigError("parameter '" + std::string(baud.first) + "' = " + std::to_string(baud.second) +
                         " is not a supported rate (" + supportedBauds() + ")");
-  requireInRange("platform/reply_timeout", stepper.reply_timeout_s, 0.01, 60.0, "s");
-  requireInRange("platform/home_timeout", stepper.home_timeout_s, 0.01, 120.0, "s");
+  requireInRange("platform/reply_timeout_s", stepper.reply_timeout_s, 0.01, 60.0, "s");
+  requireInRange("platform/home_timeout_s", stepper.home_timeout_s, 0.01, 120.0, "s");
   requireInRange("platform/retries", stepper.retries, 0, 20);
   if (urg.first_step != scanner.geometry.first_step || urg.last_step != scanner.geometry.last_step)
     throw ConfigError("scanner steps disagree between the device and the geometry");

@@ -8,12 +8,12 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "rotating_urg_driver");
   ros::NodeHandle nh, pnh("~");
   try {
-    double master_timeout = 30.0;
-    scanstop::ros_params::optional(pnh, "master_timeout", master_timeout);
+    double master_timeout_s = 30.0;
+    scanstop::ros_params::optional(pnh, "master_timeout_s", master_timeout_s);
     scanstop::urg::UrgDriverNode node(nh, pnh);
     // The ROS master gone: ERROR once (the scanner does not move the robot; a running scan ends as
-    // usual); gone longer than master_timeout (or a new master): end.
-    scanstop::RosMasterWatchdog watchdog("rotating_urg_driver", master_timeout);
+    // usual); gone longer than master_timeout_s (or a new master): end.
+    scanstop::RosMasterWatchdog watchdog("rotating_urg_driver", master_timeout_s);
     ros::AsyncSpinner spinner(3);  // a 40 s scan must not stop diagnostics and reconnects
     spinner.start();
     ros::waitForShutdown();

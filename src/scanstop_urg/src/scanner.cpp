@@ -27,11 +27,11 @@ Eigen::Vector3f ScanGeometry::origin(int plane, int planes) const {
 }
 
 void ScanGeometry::validate() const {
-  requireInRange("scanner/height", height_m, 0.05, 3.0, "m");
-  requireInRange("scanner/x_offset", x_offset_m, -1.0, 1.0, "m");
-  requireInRange("scanner/mount_offset", mount_offset_m, -0.5, 0.5, "m");
-  requireInRange("scanner/min_range", min_range_m, 0.02, 1.0, "m");
-  requireInRange("scanner/max_range", max_range_m, min_range_m + 0.01, 100.0, "m");
+  requireInRange("scanner/height_m", height_m, 0.05, 3.0, "m");
+  requireInRange("scanner/x_offset_m", x_offset_m, -1.0, 1.0, "m");
+  requireInRange("scanner/mount_offset_m", mount_offset_m, -0.5, 0.5, "m");
+  requireInRange("scanner/min_range_m", min_range_m, 0.02, 1.0, "m");
+  requireInRange("scanner/max_range_m", max_range_m, min_range_m + 0.01, 100.0, "m");
   if (steps_per_turn < 4 || steps_per_turn > 65536)
     throw ConfigError("scanner/steps_per_turn = " + std::to_string(steps_per_turn) + " must be in 4..65536");
   if (first_step < 0 || last_step <= first_step || last_step >= steps_per_turn)
@@ -92,9 +92,9 @@ void ScannerConfig::validate() const {
     throw ConfigError("max_plane_retries = " + std::to_string(max_plane_retries) + " must be in 0..20");
   if (max_consecutive_dropped < 1)
     throw ConfigError("max_consecutive_dropped = " + std::to_string(max_consecutive_dropped) + " must be >= 1");
-  requireInRange("settle_time", settle_time_s, 0.0, 5.0, "s");
-  requireInRange("outlier_filter/tolerance_abs", filter.tolerance_abs_m, 0.0, 1.0, "m");
-  requireInRange("outlier_filter/tolerance_rel", filter.tolerance_rel, 0.0, 1.0);
+  requireInRange("settle_time_s", settle_time_s, 0.0, 5.0, "s");
+  requireInRange("outlier_tolerance_abs_m", filter.tolerance_abs_m, 0.0, 1.0, "m");
+  requireInRange("outlier_tolerance_rel", filter.tolerance_rel, 0.0, 1.0);
 }
 
 RotatingScanner::RotatingScanner(UrgDevice& urg, RotationPlatform& platform, const ScannerConfig& config)

@@ -9,8 +9,8 @@ namespace scanstop {
 namespace urg {
 
 void StandstillConfig::validate() const {
-  requireInRange("standstill/max_linear_speed", max_linear_speed_mps, 0.0, 0.5, "m/s");
-  requireInRange("standstill/max_angular_speed", max_angular_speed_radps, 0.0, 1.0, "rad/s");
+  requireInRange("standstill/max_linear_speed_mps", max_linear_speed_mps, 0.0, 0.5, "m/s");
+  requireInRange("standstill/max_angular_speed_radps", max_angular_speed_radps, 0.0, 1.0, "rad/s");
 }
 
 std::string baseMotionProblem(double v_mps, double w_radps, const StandstillConfig& config) {

@@ -25,8 +25,8 @@ int intField(const std::map<std::string, std::string>& m, const std::string& key
 }  // namespace
 
 void UrgConfig::validate() const {
-  requireInRange("reply_timeout", reply_timeout_s, 0.001, 60.0, "s");
-  requireInRange("scan_timeout", scan_timeout_s, 0.001, 60.0, "s");
+  requireInRange("reply_timeout_s", reply_timeout_s, 0.001, 60.0, "s");
+  requireInRange("scan_timeout_s", scan_timeout_s, 0.001, 60.0, "s");
   if (first_step < 0 || last_step < first_step || last_step > 9999)
     throw ConfigError("scanner steps " + std::to_string(first_step) + ".." + std::to_string(last_step) +
                       " must satisfy 0 <= first_step <= last_step");

@@ -18,12 +18,12 @@ DriverConfig readDriverConfig(ros_params::ParamReader& params) {
   DriverConfig c;
   params.optional("port", c.urg_port);
   params.optional("baud", c.urg_baud);
-  params.optional("reply_timeout", c.urg.reply_timeout_s);
-  params.optional("scan_timeout", c.urg.scan_timeout_s);
+  params.optional("reply_timeout_s", c.urg.reply_timeout_s);
+  params.optional("scan_timeout_s", c.urg.scan_timeout_s);
   params.optional("platform/port", c.platform_port);
   params.optional("platform/baud", c.platform_baud);
-  params.optional("platform/reply_timeout", c.stepper.reply_timeout_s);
-  params.optional("platform/home_timeout", c.stepper.home_timeout_s);
+  params.optional("platform/reply_timeout_s", c.stepper.reply_timeout_s);
+  params.optional("platform/home_timeout_s", c.stepper.home_timeout_s);
   params.optional("platform/retries", c.stepper.retries);
   std::string platform_type = "stepper";
   params.optional("platform/type", platform_type);
@@ -31,20 +31,20 @@ DriverConfig readDriverConfig(ros_params::ParamReader& params) {
     throw ConfigError("parameter '" + pnh.resolveName("platform/type") + "' = '" + platform_type +
                       "': only 'stepper' is implemented");
   ScanGeometry& g = c.scanner.geometry;
-  params.optional("scanner/height", g.height_m);
-  params.optional("scanner/x_offset", g.x_offset_m);
-  params.optional("scanner/mount_offset", g.mount_offset_m);
+  params.optional("scanner/height_m", g.height_m);
+  params.optional("scanner/x_offset_m", g.x_offset_m);
+  params.optional("scanner/mount_offset_m", g.mount_offset_m);
   params.optional("scanner/first_step", g.first_step);
   params.optional("scanner/last_step", g.last_step);
-  params.optional("scanner/min_range", g.min_range_m);
-  params.optional("scanner/max_range", g.max_range_m);
+  params.optional("scanner/min_range_m", g.min_range_m);
+  params.optional("scanner/max_range_m", g.max_range_m);
   c.urg.first_step = g.first_step;
   c.urg.last_step = g.last_step;
   params.optional("max_plane_retries", c.scanner.max_plane_retries);
   params.optional("max_consecutive_dropped", c.scanner.max_consecutive_dropped);
-  params.optional("settle_time", c.scanner.settle_time_s);
+  params.optional("settle_time_s", c.scanner.settle_time_s);
   params.optional("outlier_filter", c.scanner.outlier_filter);
-  params.optional("outlier_tolerance_abs", c.scanner.filter.tolerance_abs_m);
+  params.optional("outlier_tolerance_abs_m", c.scanner.filter.tolerance_abs_m);
   params.optional("outlier_tolerance_rel", c.scanner.filter.tolerance_rel);
   try {
     c.validate();
@@ -57,8 +57,8 @@ DriverConfig readDriverConfig(ros_params::ParamReader& params) {
 StandstillConfig readStandstillConfig(ros_params::ParamReader& params) {
   const ros::NodeHandle& pnh = params.handle();
   StandstillConfig c;
-  params.optional("standstill/max_linear_speed", c.max_linear_speed_mps);
-  params.optional("standstill/max_angular_speed", c.max_angular_speed_radps);
+  params.optional("standstill/max_linear_speed_mps", c.max_linear_speed_mps);
+  params.optional("standstill/max_angular_speed_radps", c.max_angular_speed_radps);
   try {
     c.validate();
   } catch (const ConfigError& e) {
@@ -69,13 +69,13 @@ StandstillConfig readStandstillConfig(ros_params::ParamReader& params) {
 
 NodeParameters readNodeParameters(ros_params::ParamReader& params) {
   NodeParameters n;
-  params.known({"master_timeout"});  // main()'s master watchdog
+  params.known({"master_timeout_s"});  // main()'s master watchdog
   params.optional("odom_topic", n.odom_topic);
   if (n.odom_topic.empty())
     throw ConfigError("parameter '" + params.resolve("odom_topic") + "' is empty: give the base's odometry topic");
-  params.optional("reconnect_interval", n.reconnect_interval_s, 0.05, 600.0, "s");
+  params.optional("reconnect_interval_s", n.reconnect_interval_s, 0.05, 600.0, "s");
   params.optional("diagnostic_period", n.diagnostic_period_s, 0.05, 600.0, "s");
-  params.optional("odom_timeout", n.odom_timeout_s, 0.0, 60.0, "s");
+  params.optional("odom_timeout_s", n.odom_timeout_s, 0.0, 60.0, "s");
   params.optional("require_odom", n.require_odom);
   params.optional("base_frame", n.base_frame);
   params.optional("laser_frame", n.laser_frame);

@@ -29,20 +29,20 @@ class BadParameters(unittest.TestCase):
             self.assertIn(text, out, 'expected %r in the output for %s:\n%s' % (text, params, out))
 
     def test_scanner_height(self):
-        self.check(1, [('scanner/height', '7.0')], "'scanner/height' = 7 m is out of range [0.05, 3 m]")
+        self.check(1, [('scanner/height_m', '7.0')], "'scanner/height_m' = 7 m is out of range [0.05, 3 m]")
 
     def test_baud(self):
         self.check(2, [('baud', '12345')], "'baud' = 12345 is not a supported rate")
 
     def test_negative_reply_timeout(self):
-        self.check(3, [('reply_timeout', '-1.0')], "'reply_timeout' = -1 s is out of range [0.001, 60 s]")
+        self.check(3, [('reply_timeout_s', '-1.0')], "'reply_timeout_s' = -1 s is out of range [0.001, 60 s]")
 
     def test_negative_standstill_threshold(self):
-        self.check(4, [('standstill/max_linear_speed', '-0.1')],
-                   "'standstill/max_linear_speed' = -0.1 m/s is out of range [0, 0.5 m/s]")
+        self.check(4, [('standstill/max_linear_speed_mps', '-0.1')],
+                   "'standstill/max_linear_speed_mps' = -0.1 m/s is out of range [0, 0.5 m/s]")
 
     def test_odom_timeout(self):
-        self.check(5, [('odom_timeout', '100.0')], "odom_timeout' = 100 s is out of range [0, 60 s]")
+        self.check(5, [('odom_timeout_s', '100.0')], "odom_timeout_s' = 100 s is out of range [0, 60 s]")
 
     def test_platform_type(self):
         self.check(6, [('platform/type', 'servo')], "platform/type' = 'servo': only 'stepper' is implemented")
@@ -57,11 +57,11 @@ class BadParameters(unittest.TestCase):
         self.check(9, [('max_plane_retries', '50')], "max_plane_retries = 50 must be in 0..20")
 
     def test_unknown_parameter(self):
-        self.check(11, [('scanner/heigth', '0.45')], "unknown parameter '/bad_urg_11/scanner/heigth' (did you mean "
-                   "'scanner/height'?): nothing reads it; rotating_urg_driver reads ", "scanner/max_range")
+        self.check(11, [('scanner/height', '0.45')], "unknown parameter '/bad_urg_11/scanner/height' (did you mean "
+                   "'scanner/height_m'?): nothing reads it; rotating_urg_driver reads ", "scanner/max_range_m")
 
     def test_wrong_type(self):
-        self.check(10, [('scanner/height', 'high')], "parameter '/bad_urg_10/scanner/height' has the wrong type")
+        self.check(10, [('scanner/height_m', 'high')], "parameter '/bad_urg_10/scanner/height_m' has the wrong type")
 
 
 if __name__ == '__main__':

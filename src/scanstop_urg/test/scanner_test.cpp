@@ -405,7 +405,7 @@ TEST(Standstill, ThresholdsAreValidatedWithTheParameterName) {
     c.validate();
     ADD_FAILURE() << "accepted a negative threshold";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("'standstill/max_linear_speed' = -1 m/s is out of range [0, 0.5 m/s]"),
+    EXPECT_NE(std::string(e.what()).find("'standstill/max_linear_speed_mps' = -1 m/s is out of range [0, 0.5 m/s]"),
               std::string::npos) << e.what();
   }
   c = StandstillConfig();
@@ -431,19 +431,19 @@ TEST(DriverConfigChecks, BadValuesNameTheParameterValueAndRange) {
   EXPECT_NE(message(c).find("'platform/baud' = -9600"), std::string::npos) << message(c);
   c = DriverConfig();
   c.urg.reply_timeout_s = -1.0;
-  EXPECT_NE(message(c).find("'reply_timeout' = -1 s is out of range [0.001, 60 s]"), std::string::npos) << message(c);
+  EXPECT_NE(message(c).find("'reply_timeout_s' = -1 s is out of range [0.001, 60 s]"), std::string::npos) << message(c);
   c = DriverConfig();
   c.urg.scan_timeout_s = std::nan("");
-  EXPECT_NE(message(c).find("'scan_timeout' = nan s"), std::string::npos) << message(c);
+  EXPECT_NE(message(c).find("'scan_timeout_s' = nan s"), std::string::npos) << message(c);
   c = DriverConfig();
   c.stepper.home_timeout_s = 0.0;
-  EXPECT_NE(message(c).find("'platform/home_timeout' = 0 s is out of range"), std::string::npos) << message(c);
+  EXPECT_NE(message(c).find("'platform/home_timeout_s' = 0 s is out of range"), std::string::npos) << message(c);
   c = DriverConfig();
   c.stepper.retries = -2;
   EXPECT_NE(message(c).find("'platform/retries' = -2"), std::string::npos) << message(c);
   c = DriverConfig();
   c.scanner.geometry.height_m = 7.0;
-  EXPECT_NE(message(c).find("'scanner/height' = 7 m"), std::string::npos) << message(c);
+  EXPECT_NE(message(c).find("'scanner/height_m' = 7 m"), std::string::npos) << message(c);
   c = DriverConfig();
   c.scanner.max_plane_retries = 50;
   EXPECT_NE(message(c).find("max_plane_retries = 50 must be in 0..20"), std::string::npos) << message(c);

@@ -289,7 +289,7 @@ TEST(RotatingUrgDriver, ShippedConfigEqualsTheDefaultsAndBadValuesAreNamed) {
   // Every key of config/urg.yaml is one the node reads.
   EXPECT_TRUE(params.unknown().empty()) << params.unknown().front();
   ros::NodeHandle bad("/urg_bad");
-  bad.setParam("scanner/height", 7.0);
+  bad.setParam("scanner/height_m", 7.0);
   try {
     scanstop::ros_params::ParamReader bad_params(bad, "rotating_urg_driver");
     scanstop::urg::readDriverConfig(bad_params);
@@ -297,13 +297,13 @@ TEST(RotatingUrgDriver, ShippedConfigEqualsTheDefaultsAndBadValuesAreNamed) {
   } catch (const scanstop::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("scanner/height"), std::string::npos) << e.what();
   }
-  bad.setParam("scanner/height", "high");
+  bad.setParam("scanner/height_m", "high");
   try {
     scanstop::ros_params::ParamReader bad_params(bad, "rotating_urg_driver");
     scanstop::urg::readDriverConfig(bad_params);
     ADD_FAILURE() << "accepted a string height";
   } catch (const scanstop::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("/urg_bad/scanner/height"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/urg_bad/scanner/height_m"), std::string::npos) << e.what();
   }
 }
 

@@ -23,7 +23,7 @@ class MasterWatchdog {
   enum class Event { None, Lost, Back, TimedOut, Restarted };
 
   /// master_uri: named in the messages. timeout_s: how long the master may be gone (finite, > 0;
-  /// ConfigError naming `master_timeout` otherwise).
+  /// ConfigError naming `master_timeout_s` otherwise).
   MasterWatchdog(std::string master_uri, double timeout_s);
 
   /// One check at now_s [s, a monotonic clock]: whether it reached the master and, when it did and

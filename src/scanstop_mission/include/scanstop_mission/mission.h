@@ -161,7 +161,7 @@ class Mission {
   bool pause(std::string* why = nullptr);
   bool resume(std::string* why = nullptr);
   bool abort(std::string* why = nullptr);
-  /// Ends the mission for a reason outside it (the ROS master gone longer than master_timeout):
+  /// Ends the mission for a reason outside it (the ROS master gone longer than master_timeout_s):
   /// like abort, but run() ends Failed with `reason` (saved, so a restarted node resumes from there).
   void end(const std::string& reason);
   /// Records an event in the mission's log and state (a warning also becomes last_error).

@@ -30,11 +30,11 @@ class MissionNode {
   MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
   ~MissionNode();
 
-  /// ~master_timeout [s]: how long the ROS master may be gone before the mission ends.
+  /// ~master_timeout_s [s]: how long the ROS master may be gone before the mission ends.
   double masterTimeout() const { return master_timeout_s_; }
   /// The master watchdog's handlers. Lost: the mission pauses (state kept and saved; the step that
   /// was running ends as its service call does). Back: it resumes, unless the user had paused it.
-  /// End (gone longer than master_timeout, or a new master): the mission ends FAILED naming the
+  /// End (gone longer than master_timeout_s, or a new master): the mission ends FAILED naming the
   /// reason (state, report and summary written; restarting mission_node resumes it), then the node.
   void onMasterLost(const std::string& why);
   void onMasterBack(const std::string& why);

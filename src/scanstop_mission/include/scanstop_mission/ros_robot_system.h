@@ -19,12 +19,12 @@ namespace mission {
 
 /// Time limits of the service calls [s] (wall time).
 struct CallTimeouts {
-  double wait_for_service_s = 30.0;  ///< how long a missing service is waited for
-  double scan_s = 600.0;
-  double motion_s = 120.0;
-  double register_s = 120.0;
-  double plan_s = 60.0;
-  double mesh_s = 900.0;
+  double wait_for_service_timeout_s = 30.0;  ///< how long a missing service is waited for
+  double scan_timeout_s = 600.0;
+  double motion_timeout_s = 120.0;
+  double register_timeout_s = 120.0;
+  double plan_timeout_s = 60.0;
+  double mesh_timeout_s = 900.0;
 };
 
 class RosRobotSystem : public RobotSystem {
@@ -47,7 +47,7 @@ class RosRobotSystem : public RobotSystem {
   std::vector<std::pair<int, Pose2D>> registeredScanPoses() override;
   std::optional<Pose2D> registeredScanOdometry(int index) override;
   /// The latest `odom` message (the base publishes it latched after every motion), waited for up to
-  /// wait_for_service_s.
+  /// wait_for_service_timeout_s.
   std::optional<Pose2D> currentOdometry() override;
 
  private:

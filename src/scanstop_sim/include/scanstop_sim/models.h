@@ -42,7 +42,7 @@ struct ScannerConfig {
   Eigen::Vector3f direction(int plane, int planes, int beam) const;
   /// Origin of the beams of plane `plane` in base_link.
   Eigen::Vector3f origin(int plane, int planes) const;
-  /// Throws ConfigError naming the parameter (sim_node's name: `prefix` + field, e.g. scanner/height).
+  /// Throws ConfigError naming the parameter (sim_node's name: `prefix` + field, e.g. scanner/height_m).
   void validate(const std::string& prefix = "scanner/") const;
 };
 
@@ -76,7 +76,7 @@ struct MotionConfig {
   double linear_speed_mps = 0.2;       ///< [m/s]
   double angular_speed_radps = 0.5;    ///< [rad/s]
   /// Throws ConfigError naming the parameter: error fields as `error_prefix` + field (e.g.
-  /// profiles/thesis/motion/curvature), the speeds as `speed_prefix` + field (motion/linear_speed).
+  /// profiles/thesis/motion/curvature_per_m), the speeds as `speed_prefix` + field (motion/linear_speed_mps).
   void validate(const std::string& error_prefix = "motion/", const std::string& speed_prefix = "motion/") const;
 };
 

@@ -5,7 +5,7 @@
 ///  - lost: ROS_ERROR once "<node>: the ROS master at <uri> is unreachable (gone for 1.0 s); ...",
 ///    then the node's on_lost (mission: pause; drivers: stop the robot);
 ///  - back: ROS_WARN "... is back after 4.2 s", then on_back (mission: resume what it paused);
-///  - gone longer than master_timeout, or a new master on the URI: ROS_ERROR naming it, then on_end
+///  - gone longer than master_timeout_s, or a new master on the URI: ROS_ERROR naming it, then on_end
 ///    (default: ros::requestShutdown(); main() returns 1 when ended()).
 /// A check that hangs (a master that accepts but does not answer) counts as unreachable after
 /// max(2 s, 4 periods). The clock is the wall clock (steady), never /clock.
@@ -25,13 +25,13 @@ class RosMasterWatchdog {
     Handler on_back;
     Handler on_end;  ///< timed out or restarted; unset: ros::requestShutdown()
   };
-  /// node: the log prefix; timeout_s: the node's `master_timeout` parameter (ConfigError when out of range).
+  /// node: the log prefix; timeout_s: the node's `master_timeout_s` parameter (ConfigError when out of range).
   RosMasterWatchdog(std::string node, double timeout_s, Handlers handlers = Handlers(), double period_s = 0.5);
   ~RosMasterWatchdog();
   RosMasterWatchdog(const RosMasterWatchdog&) = delete;
   RosMasterWatchdog& operator=(const RosMasterWatchdog&) = delete;
 
-  /// The master was gone longer than master_timeout, or a new master answered: the node ends.
+  /// The master was gone longer than master_timeout_s, or a new master answered: the node ends.
   bool ended() const;
   /// Why it ended (the logged message), or "".
   std::string endReason() const;
