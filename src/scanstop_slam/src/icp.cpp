@@ -852,6 +852,122 @@ Eigen::VectorXd offsetFromPrior(const Eigen::Isometry3d& T, const Eigen::Isometr
 
 }  // namespace
 
+namespace {
+
+/// A step small enough to call the registration converged (t_c, r_c).
+bool smallStep(const Vector6d& d6, const IcpConfig& config) {
+  return d6.head<3>().norm() < config.t_c_m && d6.tail<3>().norm() < config.r_c_rad;
+}
+
+/// One Gauss-Newton step of point-to-plane ICP from the pairs' equations at T, as the 6-vector update
+/// T * fromParams(step). With the prior weighed in every direction: the weighted objective's step.
+/// Otherwise H d = -g, solved in H's eigenbasis: with degeneracy_remap (or a prior) the weak directions
+/// get no step of their own (solution remapping: the step projected onto the well-constrained
+/// subspace; *remapped is set) and, with prior information, what their few pairs and the prior say
+/// together; without, only numerically null directions (< 1e-12 of the largest) are left out, so that
+/// a singular H gives a finite step. (In the normalized parameters of the eigen-analysis:
+/// H_n = A^T H A, g_n = A^T g, d = A d_n.)
+Vector6d planeStep(const PlaneEquations& eq, const Eigen::Isometry3d& T, const Eigen::Isometry3d& keep,
+                   const IcpConfig& config, const Eigen::MatrixXd* prior_information, bool* remapped) {
+  if (prior_information && config.prior_all_directions)
+    return expand(weightedStep(eq, T, keep, *prior_information, config), config.six_dof);
+  const Spectrum s = spectrum(eq, config.six_dof, config.degeneracy_ratio);
+  const Eigen::VectorXd g = s.A.transpose() * reduce(eq.g, config.six_dof);
+  const int first = config.degeneracy_remap || prior_information ? s.weak : 0;
+  if (first > 0) *remapped = true;
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(g.size());
+  for (int k = first; k < s.values.size(); ++k)
+    if (s.values(k) > 1e-12 * s.largest()) d -= s.vectors.col(k) * (s.vectors.col(k).dot(g) / s.values(k));
+  if (prior_information && first > 0)
+    d += weakPriorStep(s, g, eq.count, offsetFromPrior(T, keep, s, config.six_dof) + d, *prior_information, config);
+  return expand(s.A * d, config.six_dof);
+}
+
+/// Point-to-point ICP's steps, with Besl and McKay's accelerated ICP (1992, section IV.C), linear
+/// form: point-to-point ICP creeps towards the optimum in ever smaller steps along a nearly constant
+/// direction, so a small step alone does not mean it has arrived (the thesis' criterion stops tenths
+/// of a degree short). When two successive steps point the same way (within 10 deg) and shrink by the
+/// ratio rho, the rest of the geometric series, step * rho / (1 - rho) (at most 25 steps), is taken at
+/// once, and convergence is declared only when that rest is below t_c and r_c too.
+class PointToPointSteps {
+ public:
+  explicit PointToPointSteps(const Eigen::Isometry3d& T) : last_params_(params(T)) {}
+
+  /// Applies one step `delta` (left-multiplied) to T, and the extrapolated rest where it creeps.
+  /// Returns true when the registration has converged.
+  bool apply(const Eigen::Isometry3d& delta, Eigen::Isometry3d& T, const IcpConfig& config) {
+    T = delta * T;
+    const double dt = delta.translation().norm();
+    const double dr = Eigen::AngleAxisd(delta.linear()).angle();
+    const Vector6d p = params(T);
+    const Vector6d step = p - last_params_;
+    last_params_ = p;
+    if (config.accelerate && last_step_.norm() > 0.0 && step.norm() > 0.0 && p.tail<3>().norm() < 3.0) {
+      const double cos_angle = step.dot(last_step_) / (step.norm() * last_step_.norm());
+      const double rho = step.norm() / last_step_.norm();
+      if (cos_angle > std::cos(10.0 * M_PI / 180.0) && rho < 0.97) {
+        const Vector6d rest = std::min(rho / (1.0 - rho), 25.0) * step;
+        if (dt < config.t_c_m && dr < config.r_c_rad && rest.head<3>().norm() < config.t_c_m &&
+            rest.tail<3>().norm() < config.r_c_rad)
+          return true;
+        T = fromParams(p + rest);
+        last_params_ = params(T);
+        last_step_.setZero();  // two regular steps before the next extrapolation
+        return false;
+      }
+    }
+    last_step_ = step;
+    return dt < config.t_c_m && dr < config.r_c_rad;
+  }
+
+ private:
+  Vector6d last_step_ = Vector6d::Zero();
+  Vector6d last_params_;
+};
+
+/// The converged pose's weak directions: point-to-point moved along them as freely as along the
+/// others, an earlier stage given as prior may have, and point-to-plane's steps were projected onto
+/// the strong directions of each iteration's pairs, which turn as the pairs change: undo that. Along
+/// the weak eigenvectors of the final pairs the correction goes back to the prior (remapToPrior),
+/// or, with prior_information, to where the weak directions' pairs and the prior weigh it
+/// (weakPriorStep); the well-constrained part of the result stays. Records the prior's gain.
+Eigen::Isometry3d settleWeakDirections(const PlaneEquations& final_eq, const Eigen::Isometry3d& T,
+                                       const Eigen::Isometry3d& keep, const IcpConfig& config,
+                                       const Eigen::MatrixXd* prior_information, IcpResult& result) {
+  const Spectrum s = spectrum(final_eq, config.six_dof, config.degeneracy_ratio);
+  const Eigen::Isometry3d remapped = remapToPrior(T, s, keep, config.six_dof);
+  if (!prior_information) return remapped;
+  const Eigen::VectorXd g_n = s.A.transpose() * reduce(final_eq.g, config.six_dof);
+  const Eigen::VectorXd step =
+      weakPriorStep(s, g_n, final_eq.count, offsetFromPrior(T, keep, s, config.six_dof), *prior_information, config);
+  const Eigen::Isometry3d settled = T * fromParams(expand(s.A * step, config.six_dof));
+  const Eigen::Isometry3d gain = remapped.inverse() * settled;
+  result.weak_gain_m = gain.translation().norm();
+  result.weak_gain_rad = Eigen::AngleAxisd(gain.linear()).angle();
+  return settled;
+}
+
+/// The verdict on a converged registration: the correction of the guess within its bounds, enough
+/// overlap and pairs; a failed one keeps T_init.
+void judge(const Eigen::Isometry3d& T_init, const IcpConfig& config, size_t count, IcpResult& result) {
+  const Eigen::Isometry3d correction = T_init.inverse() * result.T_target_source;
+  if (!result.converged) {
+    result.failure = "no convergence within " + std::to_string(config.max_iterations) + " iterations";
+  } else if (correction.translation().norm() > config.max_correction_m ||
+             Eigen::AngleAxisd(correction.linear()).angle() > config.max_correction_rad) {
+    result.converged = false;
+    result.failure = "the correction of the initial guess (" + std::to_string(correction.translation().norm()) +
+                     " m, " + std::to_string(Eigen::AngleAxisd(correction.linear()).angle()) +
+                     " rad) exceeds the bound";
+  } else if (result.overlap < config.min_overlap || count < static_cast<size_t>(config.min_correspondences)) {
+    result.converged = false;
+    result.failure = "overlap " + std::to_string(result.overlap) + " below min_overlap " + std::to_string(config.min_overlap);
+  }
+  if (!result.converged) result.T_target_source = T_init;
+}
+
+}  // namespace
+
 IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source, const Eigen::Isometry3d& T_init,
               const IcpConfig& config, const Eigen::Vector3f* source_origin, const Eigen::Isometry3d* prior,
               const Eigen::MatrixXd* prior_information) {
@@ -866,8 +982,7 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   const bool plane = config.method == IcpMethod::point_to_plane;
   Correspondences pairs(target, source, config, source_origin, plane);
   const bool skip_horizontal = !config.six_dof && config.ignore_horizontal;
-  Vector6d last_step = Vector6d::Zero();
-  Vector6d last_params = params(T);
+  PointToPointSteps point_to_point(T);
   for (int it = 1; it <= config.max_iterations; ++it) {
     result.iterations = it;
     const size_t count = pairs.find(T, skip_horizontal, config.unique_matches);
@@ -878,78 +993,19 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
     const size_t used = plane ? eq.count : count;
     if (used < static_cast<size_t>(config.min_correspondences)) {
       result.failure = "too few " + std::string(plane ? "planar " : "") + "correspondences (" + std::to_string(used) +
-                       " < " + std::to_string(config.min_correspondences) + ") within c_max = " +
+                       " < " + std::to_string(config.min_correspondences) + ") within c_max_m = " +
                        std::to_string(config.c_max_m) + " m";
       result.T_target_source = T_init;
       return result;
     }
-    if (plane && prior_information && config.prior_all_directions) {
-      const Vector6d d6 = expand(weightedStep(eq, T, keep, *prior_information, config), config.six_dof);
-      T = T * fromParams(d6);
-      if (d6.head<3>().norm() < config.t_c_m && d6.tail<3>().norm() < config.r_c_rad) {
-        result.converged = true;
-        break;
-      }
-      continue;
-    }
     if (plane) {
-      // Gauss-Newton step H d = -g, solved in H's eigenbasis. With degeneracy_remap the weak
-      // directions get no step (solution remapping: the step projected onto the well-constrained
-      // subspace); without it only numerically null directions (< 1e-12 of the largest) are left
-      // out, so that a singular H gives a finite step.
-      // (In the normalized parameters of the eigen-analysis: H_n = A^T H A, g_n = A^T g, d = A d_n.)
-      const Spectrum s = spectrum(eq, config.six_dof, config.degeneracy_ratio);
-      const Eigen::VectorXd g = s.A.transpose() * reduce(eq.g, config.six_dof);
-      const int first = config.degeneracy_remap || prior_information ? s.weak : 0;
-      if (first > 0) result.remapped = true;
-      Eigen::VectorXd d = Eigen::VectorXd::Zero(g.size());
-      for (int k = first; k < s.values.size(); ++k)
-        if (s.values(k) > 1e-12 * s.largest()) d -= s.vectors.col(k) * (s.vectors.col(k).dot(g) / s.values(k));
-      // Weighed prior: the weak directions get what their few pairs and the prior say together.
-      if (prior_information && first > 0)
-        d += weakPriorStep(s, g, eq.count, offsetFromPrior(T, keep, s, config.six_dof) + d, *prior_information, config);
-      const Vector6d d6 = expand(s.A * d, config.six_dof);
+      const Vector6d d6 = planeStep(eq, T, keep, config, prior_information, &result.remapped);
       T = T * fromParams(d6);
-      if (d6.head<3>().norm() < config.t_c_m && d6.tail<3>().norm() < config.r_c_rad) {
-        result.converged = true;
-        break;
-      }
-      continue;
+      result.converged = smallStep(d6, config);
+    } else {
+      result.converged = point_to_point.apply(pointToPointStep(source, pairs, T, count, config.six_dof), T, config);
     }
-    const Eigen::Isometry3d delta = pointToPointStep(source, pairs, T, count, config.six_dof);
-    T = delta * T;
-    const double dt = delta.translation().norm();
-    const double dr = Eigen::AngleAxisd(delta.linear()).angle();
-    // Besl and McKay's accelerated ICP (1992, section IV.C), linear form: point-to-point ICP
-    // creeps towards the optimum in ever smaller steps along a nearly constant direction, so a
-    // small step alone does not mean it has arrived (the thesis' criterion stops tenths of a
-    // degree short). When two successive steps point the same way (within 10 deg) and shrink by
-    // the ratio rho, the rest of the geometric series, step * rho / (1 - rho) (at most 25 steps),
-    // is taken at once, and convergence is declared only when that rest is below t_c and r_c too.
-    const Vector6d p = params(T);
-    const Vector6d step = p - last_params;
-    last_params = p;
-    if (config.accelerate && last_step.norm() > 0.0 && step.norm() > 0.0 && p.tail<3>().norm() < 3.0) {
-      const double cos_angle = step.dot(last_step) / (step.norm() * last_step.norm());
-      const double rho = step.norm() / last_step.norm();
-      if (cos_angle > std::cos(10.0 * M_PI / 180.0) && rho < 0.97) {
-        const Vector6d rest = std::min(rho / (1.0 - rho), 25.0) * step;
-        if (dt < config.t_c_m && dr < config.r_c_rad && rest.head<3>().norm() < config.t_c_m &&
-            rest.tail<3>().norm() < config.r_c_rad) {
-          result.converged = true;
-          break;
-        }
-        T = fromParams(p + rest);
-        last_params = params(T);
-        last_step.setZero();  // two regular steps before the next extrapolation
-        continue;
-      }
-    }
-    last_step = step;
-    if (dt < config.t_c_m && dr < config.r_c_rad) {
-      result.converged = true;
-      break;
-    }
+    if (result.converged) break;
   }
   // Final figures at the converged pose, and the information matrix of its pairs.
   double sum2 = 0.0;
@@ -957,57 +1013,27 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
   pairs.final(T, sum2, count);
   PlaneEquations final_eq = planeEquations(source, pairs, T, skip_horizontal);
   summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
-  if (result.converged && prior_information && config.prior_all_directions) {
-    if (!plane) {  // point-to-point's optimum, combined with the prior by one step of the weighted objective
-      T = T * fromParams(expand(weightedStep(final_eq, T, keep, *prior_information, config), config.six_dof));
-      pairs.final(T, sum2, count);
-      final_eq = planeEquations(source, pairs, T, skip_horizontal);
-      summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
-    }
-    result.remapped = result.degenerate;
-  } else if (result.converged && result.weak_directions > 0 && (prior_information || config.degeneracy_remap)) {
-    // Point-to-point moved along weak directions as freely as along the others, an earlier stage
-    // given as prior may have, and point-to-plane's steps were projected onto the strong directions
-    // of each iteration's pairs, which turn as the pairs change: undo that. Along the weak
-    // eigenvectors of the final pairs the correction goes back to the prior (remapToPrior), or,
-    // with prior_information, to where the weak directions' pairs and the prior weigh it
-    // (weakPriorStep); the well-constrained part of the result stays.
-    const Spectrum s = spectrum(final_eq, config.six_dof, config.degeneracy_ratio);
-    const Eigen::Isometry3d remapped = remapToPrior(T, s, keep, config.six_dof);
-    if (prior_information) {
-      const Eigen::VectorXd g_n = s.A.transpose() * reduce(final_eq.g, config.six_dof);
-      const Eigen::VectorXd step =
-          weakPriorStep(s, g_n, final_eq.count, offsetFromPrior(T, keep, s, config.six_dof), *prior_information, config);
-      T = T * fromParams(expand(s.A * step, config.six_dof));
-      const Eigen::Isometry3d gain = remapped.inverse() * T;
-      result.weak_gain_m = gain.translation().norm();
-      result.weak_gain_rad = Eigen::AngleAxisd(gain.linear()).angle();
-    } else {
-      T = remapped;
-    }
-    result.remapped = true;
+  const auto refresh = [&] {  // the figures again at a moved T
     pairs.final(T, sum2, count);
     final_eq = planeEquations(source, pairs, T, skip_horizontal);
     summarize(result, final_eq, config.six_dof, config.degeneracy_ratio);
+  };
+  if (result.converged && prior_information && config.prior_all_directions) {
+    if (!plane) {  // point-to-point's optimum, combined with the prior by one step of the weighted objective
+      T = T * fromParams(expand(weightedStep(final_eq, T, keep, *prior_information, config), config.six_dof));
+      refresh();
+    }
+    result.remapped = result.degenerate;
+  } else if (result.converged && result.weak_directions > 0 && (prior_information || config.degeneracy_remap)) {
+    T = settleWeakDirections(final_eq, T, keep, config, prior_information, result);
+    result.remapped = true;
+    refresh();
   }
   result.correspondences = count;
   result.overlap = n > 0 ? static_cast<double>(count) / n : 0.0;
   result.rms_m = count > 0 ? std::sqrt(sum2 / count) : 0.0;
   result.T_target_source = T;
-  const Eigen::Isometry3d correction = T_init.inverse() * T;
-  if (!result.converged) {
-    result.failure = "no convergence within " + std::to_string(config.max_iterations) + " iterations";
-  } else if (correction.translation().norm() > config.max_correction_m ||
-             Eigen::AngleAxisd(correction.linear()).angle() > config.max_correction_rad) {
-    result.converged = false;
-    result.failure = "the correction of the initial guess (" + std::to_string(correction.translation().norm()) +
-                     " m, " + std::to_string(Eigen::AngleAxisd(correction.linear()).angle()) +
-                     " rad) exceeds the bound";
-  } else if (result.overlap < config.min_overlap || count < static_cast<size_t>(config.min_correspondences)) {
-    result.converged = false;
-    result.failure = "overlap " + std::to_string(result.overlap) + " below min_overlap " + std::to_string(config.min_overlap);
-  }
-  if (!result.converged) result.T_target_source = T_init;
+  judge(T_init, config, count, result);
   return result;
 }
 
