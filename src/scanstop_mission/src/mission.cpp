@@ -69,15 +69,16 @@ void MissionConfig::validate() const {
     const size_t dot = mesh_output.rfind('.');
     const std::string ext = dot == std::string::npos ? "" : mesh_output.substr(dot + 1);
     if (ext != "ply" && ext != "stl")
-      throw ConfigError("parameter 'mesh_output' = '" + mesh_output + "' must end in .ply or .stl (or be empty: the mesher's default_output)");
+      throw ConfigError("parameter 'mesh_output' = '" + mesh_output +
+                        "' must end in .ply or .stl (or be empty: the mesher's default_output)");
   }
 }
 
 Mission::Mission(MissionConfig config, RobotSystem& robot, Log info, Log warn)
     : config_(std::move(config)), robot_(robot), info_(std::move(info)), warn_(std::move(warn)) {
   config_.validate();
-  dead_reckoning_ = DeadReckoning({config_.leg_check_turn_error, config_.leg_check_drift, config_.leg_check_distance_error,
-                                   config_.leg_check_turn_position_m_per_rad});
+  dead_reckoning_ = DeadReckoning({config_.leg_check_turn_error, config_.leg_check_drift,
+                                   config_.leg_check_distance_error, config_.leg_check_turn_position_m_per_rad});
   if (::mkdir(config_.run_dir.c_str(), 0755) != 0 && errno != EEXIST)
     throw IoError(config_.run_dir, "cannot create the run directory");
   state_.world = config_.world;
@@ -114,7 +115,8 @@ bool Mission::loadSavedState() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (state_.state == State::Done || state_.state == State::Aborted || state_.state == State::Failed) {
     // A finished mission is re-opened for viewing; a new run() continues exploring from its map.
-    state_.events.push_back({state_.elapsed_s, std::string("re-opened a mission that ended ") + toString(state_.state)});
+    state_.events.push_back(
+        {state_.elapsed_s, std::string("re-opened a mission that ended ") + toString(state_.state)});
   }
   state_.state = State::Idle;
   elapsed_at_start_ = state_.elapsed_s;
@@ -140,7 +142,8 @@ void Mission::adoptCurrentPoses() {
     if (poses[k].first != r.index) continue;
     const Pose2D& p = poses[k].second;
     // poses.csv holds rounded figures: a difference below a micrometre is no relaxation.
-    if (std::hypot(p.x - r.map_pose.x, p.y - r.map_pose.y) < 1e-6 && std::abs(normalizeAngle(p.yaw - r.map_pose.yaw)) < 1e-6)
+    if (std::hypot(p.x - r.map_pose.x, p.y - r.map_pose.y) < 1e-6 &&
+        std::abs(normalizeAngle(p.yaw - r.map_pose.yaw)) < 1e-6)
       continue;
     if (!r.registered_pose) r.registered_pose = r.map_pose;
     r.map_pose = p;
@@ -177,19 +180,20 @@ void Mission::adoptScansRegisteredElsewhere(int upto) {
       state_.scans.push_back(r);
       state_.last_map_pose = r.map_pose;
       state_.odom_at_last_scan = r.odom_pose;
-      state_.events.push_back({state_.elapsed_s, "adopted scan " + std::to_string(r.index) + " registered before a restart"});
+      state_.events.push_back(
+          {state_.elapsed_s, "adopted scan " + std::to_string(r.index) + " registered before a restart"});
     }
   }
   for (const ScanRecord& r : found) {
-    const std::string line = "adopted scan " + std::to_string(r.index) + " that SLAM registered for a previous mission_node";
+    const std::string line =
+        "adopted scan " + std::to_string(r.index) + " that SLAM registered for a previous mission_node";
     std::ofstream(logPath(), std::ios::app) << fmt(at_s, 1) << " s  INFO " << line << '\n';
     info_(line);
   }
 }
 
 double Mission::elapsed() const {
-  return elapsed_at_start_ +
-         std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  return elapsed_at_start_ + std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
 }
 
 void Mission::setState(State s) {
@@ -212,7 +216,8 @@ void Mission::event(const std::string& what, bool warning) {
     state_.events.push_back({elapsed(), what});
     if (warning) state_.last_error = what;
   }
-  std::ofstream(logPath(), std::ios::app) << fmt(elapsed(), 1) << " s  " << (warning ? "WARN " : "INFO ") << what << '\n';
+  std::ofstream(logPath(), std::ios::app)
+      << fmt(elapsed(), 1) << " s  " << (warning ? "WARN " : "INFO ") << what << '\n';
   (warning ? warn_ : info_)(what);
 }
 
@@ -360,7 +365,8 @@ bool Mission::scanAndRegister() {
     const int after = robot_.registeredScanCount();
     if (before >= 0 && after > before) {
       if (const std::optional<Pose2D> pose = robot_.registeredScanPose(after - 1)) {
-        event("registration answer lost, but SLAM stored scan " + std::to_string(after - 1) + "; adopting its pose", true);
+        event("registration answer lost, but SLAM stored scan " + std::to_string(after - 1) + "; adopting its pose",
+              true);
         reg.success = true;
         reg.map_pose = *pose;
         reg.scan_index = static_cast<uint32_t>(after - 1);
@@ -433,7 +439,8 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
     // The leg's own frame: x along the way the robot moves (backwards: behind it).
     const Pose2D way(0.0, 0.0, leg.backwards ? M_PI : 0.0);
     const double sign = leg.backwards ? -1.0 : 1.0;
-    double step = std::min(distance, leg_max_m_ > 0.0 ? leg_max_m_ : config_.d_max_m);  // never more than d_max in one go
+    double step =
+        std::min(distance, leg_max_m_ > 0.0 ? leg_max_m_ : config_.d_max_m);  // never more than d_max in one go
     // The map's clearance of the leg: what the robot may be off its estimate and still pass. When
     // odometry since the scan may be off by more (and the plain disc would pass), scan here first.
     if (config_.leg_check && clearance_m && config_.leg_check_radius_m <= *clearance_m &&
@@ -467,7 +474,8 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
                               dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m;
       std::string what = "leg check: the latest scan shows an obstruction " + fmt(free) + " m " +
                          (leg.backwards ? "behind" : "ahead") + " on the " + fmt(step) + " m " +
-                         (leg.backwards ? "backward " : "") + "leg to (" + fmt(waypoint.x()) + ", " + fmt(waypoint.y()) + ")";
+                         (leg.backwards ? "backward " : "") + "leg to (" + fmt(waypoint.x()) + ", " +
+                         fmt(waypoint.y()) + ")";
       // Refused before it starts: a short sidestep may clear the whole leg (a jamb it grazes).
       if (!relocalize && allowed < 0.05 && config_.leg_sidestep_m > 0.0 && sidesteps == 0) {
         const Pose2D here = snapshot().estimate();
@@ -488,11 +496,9 @@ Mission::Drive Mission::driveTo(const Eigen::Vector2d& waypoint, std::optional<d
         what += "; no sidestep of up to " + fmt(config_.leg_sidestep_m) + " m clears it";
       }
       if (!relocalize) noteObstruction(snapshot().estimate().transformPoint(blocking));
-      if (relocalize)
-        what += " within what odometry cannot see (" + deadReckoningText() + ")";
+      if (relocalize) what += " within what odometry cannot see (" + deadReckoningText() + ")";
       // A scan follows where the robot stops: stand off the obstruction so that it sees past it.
-      const double drive =
-          std::max(0.0, free - std::max(config_.leg_check_margin_m, config_.obstruction_standoff_m));
+      const double drive = std::max(0.0, free - std::max(config_.leg_check_margin_m, config_.obstruction_standoff_m));
       what += drive >= 0.05 ? "; driving " + fmt(drive) + " m of it" : "; not driving it";
       if (drive < allowed - 1e-9) what += " (" + fmt(free - drive) + " m before the obstruction)";
       if (relocalize) what += ", then scanning to re-localize";
@@ -664,8 +670,8 @@ void Mission::noteMotion(const MotionResult& r, bool leg) {
   }
   // Simulation only (the clearance is ground truth): where the near misses were, for the figures.
   event("near miss (ground truth): the body passed " + fmt(*r.true_clearance_m * 100.0, 1) +
-        " cm from the world on this leg, ending at (" + fmt(estimate.x) + ", " + fmt(estimate.y) + ") by the estimate (" +
-        deadReckoningText() + ")");
+        " cm from the world on this leg, ending at (" + fmt(estimate.x) + ", " + fmt(estimate.y) +
+        ") by the estimate (" + deadReckoningText() + ")");
 }
 
 void Mission::escapeContact(int sign, const std::string& what) {
@@ -730,6 +736,48 @@ bool Mission::contactBoundReached() const {
   return static_cast<int>(state_.contacts.size()) >= config_.max_contacts;
 }
 
+State Mission::finish(State s, std::string why) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (s == State::Aborted && !end_reason_.empty()) {  // end(): not the user's abort
+      s = State::Failed;
+      why = end_reason_;
+    }
+  }
+  adoptCurrentPoses();  // the report's trajectory and errors use the poses as finally optimized
+  setState(s);
+  event(std::string("mission ") + toString(s) + ": " + why, s == State::Failed);
+  save();
+  return s;
+}
+
+Eigen::Vector2d Mission::home(const MissionState& s) const {
+  return Eigen::Vector2d(s.scans.front().map_pose.x, s.scans.front().map_pose.y);
+}
+
+bool Mission::atHome(const MissionState& s) const {
+  const Pose2D p = s.estimate();
+  return (Eigen::Vector2d(p.x, p.y) - home(s)).norm() <= config_.home_tolerance_m;
+}
+
+bool Mission::homeward(const MissionState& s) const { return config_.return_home && s.complete; }
+
+void Mission::setPath(const PlanResult& plan, size_t next, int scan_mark) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (next >= plan.waypoints.size()) {
+    state_.path.clear();
+    state_.path_scan_at.clear();
+    state_.path_next = 0;
+    state_.path_scan_mark = -1;
+    return;
+  }
+  state_.path = plan.waypoints;
+  state_.path_scan_at = plan.scan_at;
+  state_.path_target = plan.target;
+  state_.path_next = static_cast<int>(next);
+  state_.path_scan_mark = scan_mark;
+}
+
 State Mission::run() {
   std::string ended;
   {
@@ -747,47 +795,24 @@ State Mission::run() {
   started_ = std::chrono::steady_clock::now();
   info_("mission started in " + config_.run_dir + " (" + std::to_string(config_.planes) + " planes per scan" +
         (config_.max_scans > 0 ? ", at most " + std::to_string(config_.max_scans) + " scans" : std::string()) + ")");
-  const auto finish = [this](State s, std::string why) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (s == State::Aborted && !end_reason_.empty()) {  // end(): not the user's abort
-        s = State::Failed;
-        why = end_reason_;
-      }
-    }
-    adoptCurrentPoses();  // the report's trajectory and errors use the poses as finally optimized
-    setState(s);
-    event(std::string("mission ") + toString(s) + ": " + why, s == State::Failed);
-    save();
-    return s;
-  };
 
   if (snapshot().scans.empty() && !scanAndRegister())
-    return checkControl() ? finish(State::Failed, "could not take and register the first scan: " + snapshot().last_error)
-                          : finish(State::Aborted, "aborted by the user");
+    return checkControl()
+               ? finish(State::Failed, "could not take and register the first scan: " + snapshot().last_error)
+               : finish(State::Aborted, "aborted by the user");
 
-  int failed_cycles = 0;
-  int home_plans = 0;  // plans of the way back to the start (bounded: the start may have become unreachable)
-  std::string safety_stop;  // set when max_contacts is reached: the mission ends Failed with this reason
-  const auto homeOf = [](const MissionState& s) {
-    return Eigen::Vector2d(s.scans.front().map_pose.x, s.scans.front().map_pose.y);
-  };
-  const auto atHome = [&](const MissionState& s) {
-    const Pose2D p = s.estimate();
-    return (Eigen::Vector2d(p.x, p.y) - homeOf(s)).norm() <= config_.home_tolerance_m;
-  };
-  // On the way back: exploration is complete and return_home is on (also for a resumed saved path).
-  const auto homeward = [&](const MissionState& s) { return config_.return_home && s.complete; };
-  for (int cycle = 0; cycle < config_.max_cycles; ++cycle) {
+  // The cycle: plan (or drive on along a saved path), drive the path scanning where it says, until
+  // exploration is complete (and the robot back at the start), the budget is spent or a step fails.
+  Cycle cycle;
+  for (int n = 0; n < config_.max_cycles; ++n) {
     if (!checkControl()) return finish(State::Aborted, "aborted by the user");
-    if (failed_cycles >= config_.max_consecutive_failed_cycles)
-      return finish(State::Failed, std::to_string(failed_cycles) + " cycles in a row made no progress; last error: " +
-                                       snapshot().last_error);
-
+    if (cycle.failed >= config_.max_consecutive_failed_cycles)
+      return finish(State::Failed, std::to_string(cycle.failed) +
+                                       " cycles in a row made no progress; last error: " + snapshot().last_error);
     adoptScansRegisteredElsewhere();
+    const MissionState now = snapshot();
     PlanResult plan;
     size_t first = 0;  // the waypoint to drive to first
-    MissionState now = snapshot();
     if (!now.path.empty()) {
       // A restarted mission drives on along the path it was driving (saved after every step).
       plan.waypoints = now.path;
@@ -798,203 +823,200 @@ State Mission::run() {
       event("driving on along the saved path to (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) +
             ") from waypoint " + std::to_string(first + 1) + " of " + std::to_string(plan.waypoints.size()));
     } else {
-      // Exploration complete and return_home: plan the way back to the start, until there.
-      const bool back = homeward(now);
-      if (back && atHome(now)) {
-        event("back at the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) + "), " +
-              fmt((Eigen::Vector2d(now.estimate().x, now.estimate().y) - homeOf(now)).norm()) + " m from it");
-        break;
-      }
-      if (back && home_plans >= 3) {
-        event("did not get back to the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) + ") in " +
-                  std::to_string(home_plans) + " plans; the mission ends here",
-              true);
-        break;
-      }
-      // Plan.
-      setState(State::Planning);
-      const std::optional<Eigen::Vector2d> goal = back ? std::optional<Eigen::Vector2d>(homeOf(now)) : std::nullopt;
-      if (back) ++home_plans;
-      for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
-        backoff(attempt);
-        if (!checkControl()) return finish(State::Aborted, "aborted by the user");  // paused: no retry burnt
-        std::vector<Contact> obstacles = now.contacts;  // the contacts and the leg check's obstructions
-        obstacles.insert(obstacles.end(), now.obstructions.begin(), now.obstructions.end());
-        plan = robot_.planNext(now.estimate(), now.unreachable, obstacles, goal);
-        if (plan.success) break;
-        event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
-      }
-      if (!plan.success && back) {
-        event("no way back to the start: " + plan.message + "; the mission ends here", true);
-        break;
-      }
-      if (!plan.success) return finish(State::Failed, "the explorer could not plan: " + plan.message);
-      if (plan.d_max_m > 0.0) leg_max_m_ = plan.d_max_m;
-      pending_plan_wall_s_ += plan.wall_time_s;
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        state_.plans += 1;
-        state_.coverage = plan.coverage;
-        state_.modelled_time_s += plan.duration_s;
-        state_.modelled_compute_s += plan.duration_s;
-        if (!state_.scans.empty()) {
-          state_.scans.back().coverage = plan.coverage;
-          state_.scans.back().mission_time_s = state_.modelled_time_s;
-        }
-      }
-      if (plan.complete) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        state_.complete = true;
-        state_.complete_reason = plan.complete_reason;
-      }
-      if (back && (plan.target - homeOf(now)).norm() > config_.home_tolerance_m &&
-          (plan.target - Eigen::Vector2d(now.estimate().x, now.estimate().y)).norm() <= config_.home_tolerance_m) {
-        // The start itself is not reachable in the map (e.g. a door closed by a phantom obstacle):
-        // the robot already stands at the reachable cell nearest to it.
-        event("the start (" + fmt(homeOf(now).x()) + ", " + fmt(homeOf(now).y()) +
-                  ") is not reachable in the map; the robot is at the reachable cell nearest to it, (" +
-                  fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + "), " +
-                  fmt((plan.target - homeOf(now)).norm()) + " m from it; the mission ends here",
-              true);
-        break;
-      }
-      if (plan.complete && !back) {
-        if (!config_.return_home || atHome(snapshot())) break;
-        save();
-        event("exploration complete; returning to the start (" + fmt(homeOf(now).x()) + ", " +
-              fmt(homeOf(now).y()) + ")");
-        continue;  // the next cycle plans the way back
-      }
-      if (budgetReached()) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        state_.complete_reason = "scan budget of " + std::to_string(config_.max_scans) + " scans reached";
-        break;
-      }
-      if (plan.waypoints.empty()) {
-        ++failed_cycles;
-        event("the explorer returned an empty path without completing; replanning", true);
-        continue;
-      }
-      info_("plan " + std::to_string(now.plans + 1) + (back ? " (the way back)" : "") + ": target (" +
-            fmt(plan.target.x()) + ", " +
-            fmt(plan.target.y()) + "), " + std::to_string(plan.waypoints.size()) + " waypoints, score " +
-            fmt(plan.score, 4) + ", coverage " + fmt(plan.coverage * 100.0, 1) + " %");
+      const Next next = planStep(now, cycle, plan);
+      if (next.kind == Next::Finish) return finish(next.state, next.why);
+      if (next.kind == Next::EndCycles) break;
+      if (next.kind == Next::Replan) continue;
     }
-    const auto setPath = [this, &plan](size_t next, int scan_mark) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (next >= plan.waypoints.size()) {
-        state_.path.clear();
-        state_.path_scan_at.clear();
-        state_.path_next = 0;
-        state_.path_scan_mark = -1;
-        return;
-      }
-      state_.path = plan.waypoints;
-      state_.path_scan_at = plan.scan_at;
-      state_.path_target = plan.target;
-      state_.path_next = static_cast<int>(next);
-      state_.path_scan_mark = scan_mark;
-    };
-    setPath(first, -1);
+    setPath(plan, first, -1);
     save();
-
-    // Drive the path, scanning where the plan says.
-    const size_t scans_before = snapshot().scans.size();
-    const size_t unreachable_before = snapshot().unreachable.size();
-    bool replan = false;
-    double travel = 0.0;  // planned path length since the last scan [m]
-    const double scan_travel = homeward(snapshot()) ? std::max(config_.min_scan_travel_m, config_.home_scan_travel_m)
-                                                    : config_.min_scan_travel_m;
-    Eigen::Vector2d from(now.estimate().x, now.estimate().y);
-    for (size_t i = first; i < plan.waypoints.size() && !replan; ++i) {
-      travel += (plan.waypoints[i] - from).norm();
-      from = plan.waypoints[i];
-      setPath(i, -1);
-      const std::optional<double> clearance =
-          i < plan.clearance_m.size() ? std::optional<double>(plan.clearance_m[i]) : std::nullopt;
-      Drive drive = driveTo(plan.waypoints[i], clearance);
-      while (drive == Drive::Relocalize) {
-        // Scan where the robot stopped (its pose is then known again), then on to the same waypoint.
-        // (Each time after relocalize_min_travel_m of driving: the robot gets on.)
-        travel = 0.0;
-        setPath(i, static_cast<int>(snapshot().scans.size()));
-        save();
-        if (!scanAndRegister()) break;
-        setPath(i, -1);
-        drive = driveTo(plan.waypoints[i], clearance);
-      }
-      if (drive == Drive::Relocalize) {  // the re-localization scan failed
-        if (!checkControl()) return finish(State::Aborted, "aborted by the user");
-        replan = true;
-        break;
-      }
-      if (drive != Drive::Reached) {
-        const bool collision = drive == Drive::Collision;
-        if (!checkControl()) return finish(State::Aborted, "aborted by the user");
-        {
-          std::lock_guard<std::mutex> lock(mutex_);
-          if (collision) state_.collisions += 1;
-          state_.unreachable.push_back(plan.target);
-        }
-        setPath(plan.waypoints.size(), -1);
-        if (collision && contactBoundReached()) {
-          std::lock_guard<std::mutex> lock(mutex_);
-          safety_stop = "safety stop: " + std::to_string(state_.contacts.size()) +
-                        " contacts (max_contacts " + std::to_string(config_.max_contacts) +
-                        "); the map so far is kept";
-          state_.complete_reason = safety_stop;
-          break;
-        }
-        // A scan where the last one was taken sees nothing new: re-localize after a contact (the
-        // wheels may have slipped) or after driving or turning as far as a re-localization needs,
-        // not otherwise (a robot stuck before its first leg scanned once per target it gave up:
-        // 44 scans in one spot of the house, seed 2).
-        const bool moved = collision || dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m ||
-                           dead_reckoning_.turnedRad() >= config_.relocalize_min_turn_rad;
-        event("target (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + ") marked unreachable; " +
-                  (moved ? "scanning here to re-localize, then replanning"
-                         : "replanning without a new scan (" + deadReckoningText() + ")"),
-              true);
-        if (moved && !scanAndRegister() && !checkControl()) return finish(State::Aborted, "aborted by the user");
-        replan = true;
-        break;
-      }
-      const bool last = i + 1 == plan.waypoints.size();
-      const bool landmark = i < plan.scan_at.size() && plan.scan_at[i];
-      const bool scan_here =
-          last || (landmark && (config_.scan_on_the_way == "error" ? boundAfter(plan.waypoints[i + 1]) > config_.scan_error_bound_m
-                                                                     : travel >= scan_travel));
-      if (scan_here && !last && config_.scan_on_the_way == "error")
-        info_("scanning on the way at (" + fmt(plan.waypoints[i].x()) + ", " + fmt(plan.waypoints[i].y()) +
-              "): after the next leg odometry's position bound would be +-" + fmt(boundAfter(plan.waypoints[i + 1])) +
-              " m (scan_error_bound " + fmt(config_.scan_error_bound_m) + " m; " + deadReckoningText() + ")");
-      if (scan_here) {
-        travel = 0.0;
-        setPath(i, static_cast<int>(snapshot().scans.size()));
-        save();
-        if (!scanAndRegister()) {
-          if (!checkControl()) return finish(State::Aborted, "aborted by the user");
-          replan = true;
-        }
-      }
-      setPath(replan ? plan.waypoints.size() : i + 1, -1);
-      save();
-      if (scan_here && budgetReached()) break;
-    }
-    setPath(plan.waypoints.size(), -1);
-    save();
-    if (!safety_stop.empty()) break;
+    const MissionState before = snapshot();
+    const Next driven = drivePath(plan, first, now, cycle);
+    if (driven.kind == Next::Finish) return finish(driven.state, driven.why);
+    if (!cycle.safety_stop.empty()) break;
     // Progress: a new scan, or a target given up where the last scan was taken (the next plan knows
     // one more unreachable target; the targets are finite, and max_cycles bounds them).
     const MissionState after = snapshot();
-    failed_cycles =
-        after.scans.size() > scans_before || after.unreachable.size() > unreachable_before ? 0 : failed_cycles + 1;
+    cycle.failed = after.scans.size() > before.scans.size() || after.unreachable.size() > before.unreachable.size()
+                       ? 0
+                       : cycle.failed + 1;
   }
+  return endMission(cycle);
+}
 
+Mission::Next Mission::planStep(const MissionState& now, Cycle& cycle, PlanResult& plan) {
+  // Exploration complete and return_home: plan the way back to the start, until there.
+  const bool back = homeward(now);
+  if (back && atHome(now)) {
+    event("back at the start (" + fmt(home(now).x()) + ", " + fmt(home(now).y()) + "), " +
+          fmt((Eigen::Vector2d(now.estimate().x, now.estimate().y) - home(now)).norm()) + " m from it");
+    return Next::endCycles();
+  }
+  if (back && cycle.home_plans >= 3) {
+    event("did not get back to the start (" + fmt(home(now).x()) + ", " + fmt(home(now).y()) + ") in " +
+              std::to_string(cycle.home_plans) + " plans; the mission ends here",
+          true);
+    return Next::endCycles();
+  }
+  setState(State::Planning);
+  const std::optional<Eigen::Vector2d> goal = back ? std::optional<Eigen::Vector2d>(home(now)) : std::nullopt;
+  if (back) ++cycle.home_plans;
+  for (int attempt = 0; attempt <= config_.max_step_retries; ++attempt) {
+    backoff(attempt);
+    if (!checkControl()) return Next::aborted();    // paused: no retry burnt
+    std::vector<Contact> obstacles = now.contacts;  // the contacts and the leg check's obstructions
+    obstacles.insert(obstacles.end(), now.obstructions.begin(), now.obstructions.end());
+    plan = robot_.planNext(now.estimate(), now.unreachable, obstacles, goal);
+    if (plan.success) break;
+    event("planning failed (attempt " + std::to_string(attempt + 1) + "): " + plan.message, true);
+  }
+  if (!plan.success && back) {
+    event("no way back to the start: " + plan.message + "; the mission ends here", true);
+    return Next::endCycles();
+  }
+  if (!plan.success) return Next::finishWith(State::Failed, "the explorer could not plan: " + plan.message);
+  if (plan.d_max_m > 0.0) leg_max_m_ = plan.d_max_m;
+  pending_plan_wall_s_ += plan.wall_time_s;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.plans += 1;
+    state_.coverage = plan.coverage;
+    state_.modelled_time_s += plan.duration_s;
+    state_.modelled_compute_s += plan.duration_s;
+    if (!state_.scans.empty()) {
+      state_.scans.back().coverage = plan.coverage;
+      state_.scans.back().mission_time_s = state_.modelled_time_s;
+    }
+    if (plan.complete) {
+      state_.complete = true;
+      state_.complete_reason = plan.complete_reason;
+    }
+  }
+  if (back && (plan.target - home(now)).norm() > config_.home_tolerance_m &&
+      (plan.target - Eigen::Vector2d(now.estimate().x, now.estimate().y)).norm() <= config_.home_tolerance_m) {
+    // The start itself is not reachable in the map (e.g. a door closed by a phantom obstacle):
+    // the robot already stands at the reachable cell nearest to it.
+    event("the start (" + fmt(home(now).x()) + ", " + fmt(home(now).y()) +
+              ") is not reachable in the map; the robot is at the reachable cell nearest to it, (" +
+              fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + "), " + fmt((plan.target - home(now)).norm()) +
+              " m from it; the mission ends here",
+          true);
+    return Next::endCycles();
+  }
+  if (plan.complete && !back) {
+    if (!config_.return_home || atHome(snapshot())) return Next::endCycles();
+    save();
+    event("exploration complete; returning to the start (" + fmt(home(now).x()) + ", " + fmt(home(now).y()) + ")");
+    return Next::replan();  // the next cycle plans the way back
+  }
+  if (budgetReached()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.complete_reason = "scan budget of " + std::to_string(config_.max_scans) + " scans reached";
+    return Next::endCycles();
+  }
+  if (plan.waypoints.empty()) {
+    ++cycle.failed;
+    event("the explorer returned an empty path without completing; replanning", true);
+    return Next::replan();
+  }
+  info_("plan " + std::to_string(now.plans + 1) + (back ? " (the way back)" : "") + ": target (" +
+        fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + "), " + std::to_string(plan.waypoints.size()) +
+        " waypoints, score " + fmt(plan.score, 4) + ", coverage " + fmt(plan.coverage * 100.0, 1) + " %");
+  return Next::drive();
+}
+
+Mission::Next Mission::drivePath(const PlanResult& plan, size_t first, const MissionState& now, Cycle& cycle) {
+  bool replan = false;
+  double travel = 0.0;  // planned path length since the last scan [m]
+  const double scan_travel = homeward(snapshot()) ? std::max(config_.min_scan_travel_m, config_.home_scan_travel_m)
+                                                  : config_.min_scan_travel_m;
+  Eigen::Vector2d from(now.estimate().x, now.estimate().y);
+  for (size_t i = first; i < plan.waypoints.size() && !replan; ++i) {
+    travel += (plan.waypoints[i] - from).norm();
+    from = plan.waypoints[i];
+    setPath(plan, i, -1);
+    const std::optional<double> clearance =
+        i < plan.clearance_m.size() ? std::optional<double>(plan.clearance_m[i]) : std::nullopt;
+    Drive drive = driveTo(plan.waypoints[i], clearance);
+    while (drive == Drive::Relocalize) {
+      // Scan where the robot stopped (its pose is then known again), then on to the same waypoint.
+      // (Each time after relocalize_min_travel_m of driving: the robot gets on.)
+      travel = 0.0;
+      setPath(plan, i, static_cast<int>(snapshot().scans.size()));
+      save();
+      if (!scanAndRegister()) break;
+      setPath(plan, i, -1);
+      drive = driveTo(plan.waypoints[i], clearance);
+    }
+    if (drive == Drive::Relocalize) {  // the re-localization scan failed
+      if (!checkControl()) return Next::aborted();
+      replan = true;
+      break;
+    }
+    if (drive != Drive::Reached) {
+      if (!checkControl()) return Next::aborted();
+      if (giveUpTarget(plan, drive == Drive::Collision, cycle)) return Next::aborted();
+      replan = true;
+      break;
+    }
+    const bool last = i + 1 == plan.waypoints.size();
+    const bool landmark = i < plan.scan_at.size() && plan.scan_at[i];
+    const bool scan_here = last || (landmark && (config_.scan_on_the_way == "error"
+                                                     ? boundAfter(plan.waypoints[i + 1]) > config_.scan_error_bound_m
+                                                     : travel >= scan_travel));
+    if (scan_here && !last && config_.scan_on_the_way == "error")
+      info_("scanning on the way at (" + fmt(plan.waypoints[i].x()) + ", " + fmt(plan.waypoints[i].y()) +
+            "): after the next leg odometry's position bound would be +-" + fmt(boundAfter(plan.waypoints[i + 1])) +
+            " m (scan_error_bound_m " + fmt(config_.scan_error_bound_m) + " m; " + deadReckoningText() + ")");
+    if (scan_here) {
+      travel = 0.0;
+      setPath(plan, i, static_cast<int>(snapshot().scans.size()));
+      save();
+      if (!scanAndRegister()) {
+        if (!checkControl()) return Next::aborted();
+        replan = true;
+      }
+    }
+    setPath(plan, replan ? plan.waypoints.size() : i + 1, -1);
+    save();
+    if (scan_here && budgetReached()) break;
+  }
+  setPath(plan, plan.waypoints.size(), -1);
+  save();
+  return Next::drive();
+}
+
+bool Mission::giveUpTarget(const PlanResult& plan, bool collision, Cycle& cycle) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (collision) state_.collisions += 1;
+    state_.unreachable.push_back(plan.target);
+  }
+  setPath(plan, plan.waypoints.size(), -1);
+  if (collision && contactBoundReached()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cycle.safety_stop = "safety stop: " + std::to_string(state_.contacts.size()) + " contacts (max_contacts " +
+                        std::to_string(config_.max_contacts) + "); the map so far is kept";
+    state_.complete_reason = cycle.safety_stop;
+    return false;
+  }
+  // A scan where the last one was taken sees nothing new: re-localize after a contact (the
+  // wheels may have slipped) or after driving or turning as far as a re-localization needs,
+  // not otherwise (a robot stuck before its first leg scanned once per target it gave up:
+  // 44 scans in one spot of the house, seed 2).
+  const bool moved = collision || dead_reckoning_.drivenM() >= config_.relocalize_min_travel_m ||
+                     dead_reckoning_.turnedRad() >= config_.relocalize_min_turn_rad;
+  event("target (" + fmt(plan.target.x()) + ", " + fmt(plan.target.y()) + ") marked unreachable; " +
+            (moved ? "scanning here to re-localize, then replanning"
+                   : "replanning without a new scan (" + deadReckoningText() + ")"),
+        true);
+  return moved && !scanAndRegister() && !checkControl();
+}
+
+State Mission::endMission(const Cycle& cycle) {
   const MissionState end = snapshot();
   if (!end.complete && end.complete_reason.empty())
     return finish(State::Failed, "stopped after " + std::to_string(config_.max_cycles) + " cycles");
-
   if (config_.build_mesh) {
     setState(State::Meshing);
     MeshResult mesh;
@@ -1012,7 +1034,7 @@ State Mission::run() {
     else
       event("meshing failed: " + mesh.message, true);
   }
-  if (!safety_stop.empty()) return finish(State::Failed, safety_stop);
+  if (!cycle.safety_stop.empty()) return finish(State::Failed, cycle.safety_stop);
   return finish(State::Done, end.complete ? "exploration complete: " + end.complete_reason : end.complete_reason);
 }
 

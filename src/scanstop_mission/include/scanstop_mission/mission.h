@@ -2,7 +2,8 @@
 /// The scan-stop cycle (thesis chapters 1, 5.5, 8): scan -> register -> plan -> drive the path
 /// (rotate, then straight segments of at most d_max; scan and register at intermediate landmarks)
 /// -> repeat until the explorer reports exploration complete (then, with return_home, drive back to
-/// the start), the scan budget is reached or the user aborts. ROS-free: the steps go through a RobotSystem; the state is saved after every step.
+/// the start), the scan budget is reached or the user aborts. ROS-free: the steps go through a RobotSystem; the state
+/// is saved after every step.
 
 #include <atomic>
 #include <chrono>
@@ -21,8 +22,8 @@ namespace mission {
 
 /// Mission parameters (the node maps its ROS parameters onto these fields in one place).
 struct MissionConfig {
-  int planes = 400;                      ///< planes per 3D scan: 50, 100, 200 or 400
-  int max_scans = 0;                     ///< scan budget; 0 = until exploration is complete
+  int planes = 400;   ///< planes per 3D scan: 50, 100, 200 or 400
+  int max_scans = 0;  ///< scan budget; 0 = until exploration is complete
   /// Longest straight motion [m] (thesis d_max) until a plan says the explorer's (PlanResult::d_max_m):
   /// one source, the explorer's d_max_m (config/explorer.yaml); this is the fallback.
   double d_max_m = 2.0;
@@ -45,7 +46,7 @@ struct MissionConfig {
   /// on any path, and at the end) before the mission ends: the robot comes back, and its last
   /// scan registers against the well-mapped start instead of the far end of a corridor.
   bool return_home = true;
-  double home_tolerance_m = 0.5;         ///< within this of the first scan's position the robot is back [m]
+  double home_tolerance_m = 0.5;  ///< within this of the first scan's position the robot is back [m]
   /// On the way back, scans at intermediate landmarks only once the path driven since the last scan
   /// is at least this long [m] (min_scan_travel_m when smaller): the way leads over mapped ground,
   /// the scans there only hold the pose (room_10x8, min_scan_travel 2.0, seeds 1-3: 3 m -> 4 scans
@@ -75,18 +76,19 @@ struct MissionConfig {
   /// the body; a leg shortened so is logged, the target marked unreachable, the robot rescans and
   /// the mission replans. false: no check (the thesis).
   bool leg_check = true;
-  double leg_check_radius_m = 0.28;    ///< the body's swept radius plus a margin [m], (0, 2] (mission_node: robot_body/radius + 0.02)
-  double leg_check_margin_m = 0.05;    ///< stop this far before the first obstruction [m], [0, 1]
+  double leg_check_radius_m =
+      0.28;  ///< the body's swept radius plus a margin [m], (0, 2] (mission_node: robot_body/radius + 0.02)
+  double leg_check_margin_m = 0.05;  ///< stop this far before the first obstruction [m], [0, 1]
   /// A leg the check stops at an obstruction before its waypoint is followed by a scan where the
   /// robot stops (re-localization, or the target given up): the robot then stops this far before
   /// the obstruction (at least leg_check_margin_m), so that the scan sees past it. A scan taken
   /// with the body 5 cm before furniture sees about half of its points and may fail registration
   /// (turtlebot3_house seed 1, scan 41: 25 cm of drift after it). [m], [0, 2]
   double obstruction_standoff_m = 0.3;
-  double leg_check_min_z_m = 0.03;     ///< the body's height band: from (above the floor layer) [m]
-  double leg_check_max_z_m = 0.6;      ///< ... to (the body's and the mast's height) [m] (mission_node: robot_body/height)
-  double leg_check_self_m = 0.3;       ///< scan points this close to base_link are the robot itself [m], [0, 2]
-  int leg_check_min_points = 3;        ///< points that make an obstruction (random readings are single), [1, 1000]
+  double leg_check_min_z_m = 0.03;  ///< the body's height band: from (above the floor layer) [m]
+  double leg_check_max_z_m = 0.6;   ///< ... to (the body's and the mast's height) [m] (mission_node: robot_body/height)
+  double leg_check_self_m = 0.3;    ///< scan points this close to base_link are the robot itself [m], [0, 2]
+  int leg_check_min_points = 3;     ///< points that make an obstruction (random readings are single), [1, 1000]
   /// What odometry cannot see since the scan (DeadReckoning): the swept disc grows by the position
   /// bound and, at x ahead, by x * tan(heading bound). The heading bound is leg_check_turn_error
   /// times the |turns| summed since the scan plus leg_check_drift per metre driven; the position
@@ -94,9 +96,9 @@ struct MissionConfig {
   /// furnished_2: a 190 deg turn beside a table edge, 2 cm off it (at the estimated heading the edge
   /// lay beside the leg, at the true one ahead); five legs (288 deg, 4.3 m) after a scan, 0.31 m
   /// beside the estimate, into a door jamb. All 0 = the plain disc.
-  double leg_check_turn_error = 0.03;      ///< heading error per radian turned [rad/rad], [0, 0.5]
-  double leg_check_drift = 0.015;          ///< heading drift per metre driven [rad/m], [0, 0.5]
-  double leg_check_distance_error = 0.04;  ///< position error per metre driven [m/m], [0, 0.5]
+  double leg_check_turn_error = 0.03;               ///< heading error per radian turned [rad/rad], [0, 0.5]
+  double leg_check_drift = 0.015;                   ///< heading drift per metre driven [rad/m], [0, 0.5]
+  double leg_check_distance_error = 0.04;           ///< position error per metre driven [m/m], [0, 0.5]
   double leg_check_turn_position_m_per_rad = 0.03;  ///< position error per radian turned [m/rad], [0, 0.5]
   /// A leg whose direction lies more than 90 deg from the robot's heading is driven backwards after
   /// the smaller turn (the scan sees all around and nothing is sensed while driving, so backwards is
@@ -122,18 +124,18 @@ struct MissionConfig {
   double leg_sidestep_m = 0.25;
   /// A straight leg whose true clearance (simulation) falls below this counts as a close leg [m].
   static constexpr double kCloseLeg = 0.05;
-  int max_step_retries = 2;              ///< retries of a failed scan, registration, plan or mesh
+  int max_step_retries = 2;  ///< retries of a failed scan, registration, plan or mesh
   /// Wait before retry n (n = 1, 2, ...) of a failed step: n times this [s]. A node that died
   /// mid-call is usually back (respawn) within a few seconds.
   double retry_backoff_s = 1.0;
-  int max_consecutive_failed_cycles = 5; ///< cycles in a row that make no progress before giving up
-  int max_cycles = 1000;                 ///< hard bound on plan-drive cycles
-  bool build_mesh = true;                ///< ask the mesher for a mesh at the end (if one runs)
+  int max_consecutive_failed_cycles = 5;  ///< cycles in a row that make no progress before giving up
+  int max_cycles = 1000;                  ///< hard bound on plan-drive cycles
+  bool build_mesh = true;                 ///< ask the mesher for a mesh at the end (if one runs)
   /// Where the mesher is asked to write the mesh (a path on the mesher's host, .ply or .stl);
   /// empty = the mesher's own default_output (a mesher on another host).
   std::string mesh_output;
-  std::string run_dir;                   ///< where the state, the log and the report go
-  std::string world;                     ///< world name for the report (simulation)
+  std::string run_dir;  ///< where the state, the log and the report go
+  std::string world;    ///< world name for the report (simulation)
 
   /// Throws ConfigError naming the first bad field.
   void validate() const;
@@ -179,6 +181,48 @@ class Mission {
  private:
   enum class Control { Run, Pause, Abort };
 
+  /// run()'s steps. What a step says the cycle does next.
+  struct Next {
+    enum Kind { Drive, Replan, EndCycles, Finish };
+    Kind kind = Drive;
+    State state = State::Done;  ///< Finish: the mission ends so, with why
+    std::string why;
+    static Next drive() { return {}; }
+    static Next replan() { return {Replan, State::Done, ""}; }
+    static Next endCycles() { return {EndCycles, State::Done, ""}; }
+    static Next finishWith(State s, std::string why) { return {Finish, s, std::move(why)}; }
+    static Next aborted() { return finishWith(State::Aborted, "aborted by the user"); }
+  };
+  /// What the cycle carries from one iteration to the next.
+  struct Cycle {
+    int failed = 0;           ///< cycles in a row without progress
+    int home_plans = 0;       ///< plans of the way back to the start (bounded: it may have become unreachable)
+    std::string safety_stop;  ///< set when max_contacts is reached: the mission ends Failed with it
+  };
+  /// Plans the next target (or the way back to the start once exploration is complete and
+  /// return_home is on) into `plan`: Drive it, Replan (nothing to drive), EndCycles (done, back home,
+  /// budget spent) or Finish.
+  Next planStep(const MissionState& now, Cycle& cycle, PlanResult& plan);
+  /// Drives plan's waypoints from `first`, scanning where the plan says (landmarks, the target) or
+  /// where the leg check needs a re-localization; a waypoint that cannot be reached gives the target
+  /// up. Drive (the cycle goes on) or Finish.
+  Next drivePath(const PlanResult& plan, size_t first, const MissionState& now, Cycle& cycle);
+  /// A target the robot could not reach (a collision or a refused leg): marked unreachable, the
+  /// contact bound checked (cycle.safety_stop), a re-localization scan where the robot moved.
+  /// True when the mission was aborted meanwhile.
+  bool giveUpTarget(const PlanResult& plan, bool collision, Cycle& cycle);
+  /// After the cycle: the mesh, and the final state.
+  State endMission(const Cycle& cycle);
+  /// Ends the mission in state s (an abort after end() becomes Failed with end()'s reason).
+  State finish(State s, std::string why);
+  /// The path being driven, saved with the state (a restarted mission drives on along it): plan's
+  /// waypoints from `next` (none when next is past the end); scan_mark: the scan count before a
+  /// scan at waypoint `next` (-1: none).
+  void setPath(const PlanResult& plan, size_t next, int scan_mark);
+  Eigen::Vector2d home(const MissionState& s) const;  ///< the first scan's position (map frame)
+  bool atHome(const MissionState& s) const;           ///< the estimate within home_tolerance_m of it
+  bool homeward(const MissionState& s) const;         ///< exploration complete and return_home on
+
   bool scanAndRegister();
   /// Adopts the scans SLAM holds beyond the last one the mission knows, up to index `upto`
   /// (exclusive; -1 = all): registered by a mission that died before it could save them, or
@@ -216,7 +260,8 @@ class Mission {
   /// see by `bounds` (nullptr: the plain disc, as if odometry were exact since the scan); +inf
   /// without a scan to check against.
   /// blocking: the point that ends the free travel (present base_link), when it is finite.
-  double freeTravel(const DeadReckoning* bounds, const Pose2D& from = Pose2D(), Eigen::Vector2d* blocking = nullptr) const;
+  double freeTravel(const DeadReckoning* bounds, const Pose2D& from = Pose2D(),
+                    Eigen::Vector2d* blocking = nullptr) const;
   /// Keeps a point (map frame) the leg check stopped a leg before as an obstruction for every later
   /// plan (MissionState::obstructions, disc contact_point_radius_m; one within that of a known one
   /// is known; the oldest goes beyond kMaxObstructions).
@@ -242,7 +287,7 @@ class Mission {
   };
   LegTurn legTurn(const Eigen::Vector2d& delta, double yaw) const;
   bool contactBoundReached() const;
-  bool checkControl();  ///< waits while paused; false when aborted
+  bool checkControl();        ///< waits while paused; false when aborted
   void backoff(int attempt);  ///< waits attempt * retry_backoff_s (returns early on abort)
   void setState(State s);
   void notifyState();
@@ -257,7 +302,7 @@ class Mission {
   /// pose they were taken at (the leg check).
   std::vector<Eigen::Vector2d> obstacles_;
   Pose2D obstacles_odom_;
-  double leg_max_m_ = 0.0;  ///< the last plan's d_max (0: none yet: config_.d_max_m)
+  double leg_max_m_ = 0.0;        ///< the last plan's d_max (0: none yet: config_.d_max_m)
   DeadReckoning dead_reckoning_;  ///< what odometry cannot see since that scan (the leg check)
   Log info_, warn_;
   mutable std::mutex mutex_;
