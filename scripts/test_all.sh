@@ -80,6 +80,12 @@ if { /usr/bin/python3 scripts/check_param_docs.py --self-test && /usr/bin/python
 tail -3 logs/check_param_docs.log
 junit param_docs $pd_ok logs/check_param_docs.log
 
+# The C++ sources are formatted by the repository's .clang-format (no build needed).
+echo "test: C++ formatting (scripts/check_format.sh)"
+if bash scripts/check_format.sh > logs/check_format.log 2>&1; then fmt_ok=1; else fmt_ok=0; fi
+tail -3 logs/check_format.log
+junit clang_format $fmt_ok logs/check_format.log
+
 echo "test: catkin_make run_tests (log in logs/run_tests.log)"
 catkin_make -DCATKIN_ENABLE_TESTING=ON -j1 run_tests > logs/run_tests.log 2>&1
 run_rc=$?

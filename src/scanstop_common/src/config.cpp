@@ -19,8 +19,8 @@ std::string withUnit(double v, const std::string& unit) {
 
 void requireInRange(const std::string& name, double value, double lo, double hi, const std::string& unit) {
   if (!std::isfinite(value) || value < lo || value > hi)
-    throw ConfigError("parameter '" + name + "' = " + withUnit(value, unit) + " is out of range [" +
-                      withUnit(lo, "") + ", " + withUnit(hi, unit) + "]");
+    throw ConfigError("parameter '" + name + "' = " + withUnit(value, unit) + " is out of range [" + withUnit(lo, "") +
+                      ", " + withUnit(hi, unit) + "]");
 }
 
 void requirePositive(const std::string& name, double value, const std::string& unit) {

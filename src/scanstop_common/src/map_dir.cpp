@@ -54,7 +54,6 @@ std::string poseProblem(const Pose2D& p, const char* what) {
   return {};
 }
 
-
 std::vector<std::string> splitCsv(const std::string& line) {
   std::vector<std::string> out;
   std::stringstream in(line);
@@ -103,7 +102,8 @@ MapScanInfo parseLine(const std::string& line) {
     const std::string problem = poseProblem(*pose.first, pose.second);
     if (!problem.empty()) fail(problem);
   }
-  const bool control = std::any_of(info.file.begin(), info.file.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; });
+  const bool control =
+      std::any_of(info.file.begin(), info.file.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; });
   if (info.file.empty() || info.file.find("..") != std::string::npos || info.file[0] == '/' || control)
     fail("scan file name '" + info.file.substr(0, 40) + "' must be a relative path inside the map directory");
   // One spelling per file: "scans//a.pcd" and "./scans/a.pcd" name scans/a.pcd, so that the checks
@@ -148,10 +148,9 @@ std::vector<std::string> scanFilesOnDisk(const std::string& scans_dir) {
 std::string formatLine(const MapScanInfo& s) {
   std::ostringstream out;
   out << std::setprecision(17) << s.index << ',' << s.file << ',' << s.stamp_s << ',' << s.map_pose.x << ','
-      << s.map_pose.y << ',' << s.map_pose.yaw << ',' << s.odom_pose.x << ',' << s.odom_pose.y << ','
-      << s.odom_pose.yaw << ',' << s.sensor_origin.x() << ',' << s.sensor_origin.y() << ',' << s.sensor_origin.z()
-      << ',' << (s.converged ? 1 : 0) << ',' << s.iterations << ',' << s.correspondences << ',' << s.rms_m << ','
-      << s.overlap;
+      << s.map_pose.y << ',' << s.map_pose.yaw << ',' << s.odom_pose.x << ',' << s.odom_pose.y << ',' << s.odom_pose.yaw
+      << ',' << s.sensor_origin.x() << ',' << s.sensor_origin.y() << ',' << s.sensor_origin.z() << ','
+      << (s.converged ? 1 : 0) << ',' << s.iterations << ',' << s.correspondences << ',' << s.rms_m << ',' << s.overlap;
   return out.str();
 }
 
@@ -175,7 +174,8 @@ void appendFileSynced(const std::string& path, std::string data) {
     }
     written += static_cast<size_t>(n);
   }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) throw IoError(path, std::string("cannot flush to disk: ") + std::strerror(errno));
+  if (::fsync(fd) != 0 || ::close(fd) != 0)
+    throw IoError(path, std::string("cannot flush to disk: ") + std::strerror(errno));
 }
 
 }  // namespace
@@ -201,9 +201,9 @@ void MapDirectory::load() {
   const std::string poses = posesPath();
   long largest = -1;  // the largest index poses.csv mentions, also on lines that are skipped
   const auto note = [&largest](uint32_t index) { largest = std::max<long>(largest, index); };
-  std::vector<MapScanInfo> all;     // parsed lines, first of each index
-  std::vector<size_t> first_line;  // their line numbers
-  std::vector<std::string> mentioned;  // file column of skipped lines
+  std::vector<MapScanInfo> all;                        // parsed lines, first of each index
+  std::vector<size_t> first_line;                      // their line numbers
+  std::vector<std::string> mentioned;                  // file column of skipped lines
   std::vector<std::pair<size_t, uint32_t>> bad_lines;  // (problem, index) of lines that did not parse
   struct stat st;
   const bool exists = ::stat(poses.c_str(), &st) == 0 || errno != ENOENT;
@@ -230,7 +230,8 @@ void MapDirectory::load() {
       }
       const std::vector<std::string> columns = splitCsv(line);
       if (columns.size() > 1) mentioned.push_back(columns[1]);
-      problems_.push_back({poses, where + (line_no == 1 ? "not the scanstop poses header" : e.what()) + "; line skipped"});
+      problems_.push_back(
+          {poses, where + (line_no == 1 ? "not the scanstop poses header" : e.what()) + "; line skipped"});
       continue;
     }
     if (line_no == 1) problems_.push_back({poses, "line 1: the header is missing; read as a scan line"});
@@ -241,7 +242,8 @@ void MapDirectory::load() {
                                       std::to_string(first_line[same - all.begin()]) + "; line skipped"});
       continue;
     }
-    const auto same_file = std::find_if(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == info.file; });
+    const auto same_file =
+        std::find_if(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == info.file; });
     if (same_file != all.end()) {
       problems_.push_back({poses, where + "file " + info.file + " already belongs to scan " +
                                       std::to_string(same_file->index) + " (line " +
@@ -254,7 +256,8 @@ void MapDirectory::load() {
   restoreFromJournal(all, largest);
   for (const auto& [problem, index] : bad_lines)
     if (std::find(restored_.begin(), restored_.end(), index) != restored_.end()) problems_[problem].repaired = true;
-  std::stable_sort(all.begin(), all.end(), [](const MapScanInfo& a, const MapScanInfo& b) { return a.index < b.index; });
+  std::stable_sort(all.begin(), all.end(),
+                   [](const MapScanInfo& a, const MapScanInfo& b) { return a.index < b.index; });
   for (const MapScanInfo& info : all) {
     const std::string path = dir_ + "/" + info.file;
     std::string problem;
@@ -278,9 +281,11 @@ void MapDirectory::load() {
   // (or a line lost when a corrupt poses.csv was repaired).
   // They hold no pose; the scan with that index, when it comes, replaces them.
   for (const std::string& name : scanFilesOnDisk(dir_ + "/scans")) {
-    const bool listed = std::any_of(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == "scans/" + name; }) ||
-                        std::find(mentioned.begin(), mentioned.end(), "scans/" + name) != mentioned.end();
-    if (!listed) problems_.push_back({dir_ + "/scans/" + name, "not listed in poses.csv (an interrupted append?); not loaded"});
+    const bool listed =
+        std::any_of(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == "scans/" + name; }) ||
+        std::find(mentioned.begin(), mentioned.end(), "scans/" + name) != mentioned.end();
+    if (!listed)
+      problems_.push_back({dir_ + "/scans/" + name, "not listed in poses.csv (an interrupted append?); not loaded"});
   }
   // The next scan's file must not be one a line names (a line may name another index's file).
   for (const MapScanInfo& s : all) named_files_.push_back(s.file);
@@ -331,7 +336,8 @@ void MapDirectory::restoreFromJournal(std::vector<MapScanInfo>& all, long& large
       problems_.push_back({journal, "line " + std::to_string(line_no) + ": " + e.what() + "; line ignored"});
       continue;
     }
-    const auto same = std::find_if(latest.begin(), latest.end(), [&](const auto& l) { return l.first.index == info.index; });
+    const auto same =
+        std::find_if(latest.begin(), latest.end(), [&](const auto& l) { return l.first.index == info.index; });
     if (same != latest.end())
       *same = {info, line_no};
     else
@@ -350,7 +356,8 @@ void MapDirectory::restoreFromJournal(std::vector<MapScanInfo>& all, long& large
     const auto owner = std::find_if(all.begin(), all.end(), [&](const MapScanInfo& s) { return s.file == info.file; });
     if (owner != all.end()) {
       problems_.push_back({journal, "line " + std::to_string(entry.second) + ": " + where + "its file " + info.file +
-                                        " belongs to scan " + std::to_string(owner->index) + " in poses.csv; not restored"});
+                                        " belongs to scan " + std::to_string(owner->index) +
+                                        " in poses.csv; not restored"});
       continue;
     }
     problems_.push_back({poses, where + "restored from poses_journal.csv line " + std::to_string(entry.second), true});
@@ -380,16 +387,20 @@ void MapDirectory::writeJournal(const std::vector<MapScanInfo>& rows) const {
 
 void MapDirectory::setNextIndex(uint32_t candidate) {
   next_index_ = candidate;
-  while (std::find(named_files_.begin(), named_files_.end(), scanFileName(next_index_)) != named_files_.end()) ++next_index_;
+  while (std::find(named_files_.begin(), named_files_.end(), scanFileName(next_index_)) != named_files_.end())
+    ++next_index_;
 }
 
 void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
   if (info.index != next_index_)
     throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": the next index is " +
-                                   std::to_string(next_index_) + " (" + std::to_string(scans_.size()) + " scans loaded)");
-  for (const auto& pose : {std::make_pair(&info.map_pose, "map pose"), std::make_pair(&info.odom_pose, "odometry pose")}) {
+                                   std::to_string(next_index_) + " (" + std::to_string(scans_.size()) +
+                                   " scans loaded)");
+  for (const auto& pose :
+       {std::make_pair(&info.map_pose, "map pose"), std::make_pair(&info.odom_pose, "odometry pose")}) {
     const std::string problem = poseProblem(*pose.first, pose.second);
-    if (!problem.empty()) throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": " + problem);
+    if (!problem.empty())
+      throw IoError(posesPath(), "cannot append scan " + std::to_string(info.index) + ": " + problem);
   }
   info.file = scanFileName(info.index);
   writeCloud(dir_ + "/" + info.file, removeNonFinite(cloud_base));
@@ -406,7 +417,8 @@ void MapDirectory::append(MapScanInfo info, const PointCloud& cloud_base) {
 }
 
 void MapDirectory::updateInfo(const MapScanInfo& info) {
-  const auto it = std::find_if(scans_.begin(), scans_.end(), [&](const MapScanInfo& s) { return s.index == info.index; });
+  const auto it =
+      std::find_if(scans_.begin(), scans_.end(), [&](const MapScanInfo& s) { return s.index == info.index; });
   if (it == scans_.end())
     throw IoError(posesPath(), "cannot update scan " + std::to_string(info.index) + ": no such scan");
   const MapScanInfo old = *it;
@@ -431,23 +443,28 @@ uint32_t MapDirectory::updatePoses(const std::vector<std::pair<uint32_t, Pose2D>
   for (const auto& entry : poses) {
     const uint32_t index = entry.first;
     const Pose2D& pose = entry.second;
-    const auto it = std::find_if(updated.begin(), updated.end(), [&](const MapScanInfo& s) { return s.index == index; });
+    const auto it =
+        std::find_if(updated.begin(), updated.end(), [&](const MapScanInfo& s) { return s.index == index; });
     if (it == updated.end())
       throw IoError(posesPath(), "cannot update the pose of scan " + std::to_string(index) + ": no such scan");
     if (!pose.isFinite())
-      throw IoError(posesPath(), "cannot update scan " + std::to_string(index) + " to the non-finite pose " + pose.toString());
+      throw IoError(posesPath(),
+                    "cannot update scan " + std::to_string(index) + " to the non-finite pose " + pose.toString());
     if (!poseProblem(pose, "pose").empty())
       throw IoError(posesPath(), "cannot update scan " + std::to_string(index) + ": " + poseProblem(pose, "pose"));
     if (it->map_pose.x == pose.x && it->map_pose.y == pose.y && it->map_pose.yaw == pose.yaw) continue;
-    old_lines << index << ',' << revision << ',' << it->map_pose.x << ',' << it->map_pose.y << ',' << it->map_pose.yaw << '\n';
+    old_lines << index << ',' << revision << ',' << it->map_pose.x << ',' << it->map_pose.y << ',' << it->map_pose.yaw
+              << '\n';
     it->map_pose = pose;
     changed = true;
   }
   if (!changed) return pose_revision_;
   std::vector<MapScanInfo> moved;
   for (const MapScanInfo& s : updated) {
-    const auto before = std::find_if(scans_.begin(), scans_.end(), [&](const MapScanInfo& o) { return o.index == s.index; });
-    if (before->map_pose.x != s.map_pose.x || before->map_pose.y != s.map_pose.y || before->map_pose.yaw != s.map_pose.yaw)
+    const auto before =
+        std::find_if(scans_.begin(), scans_.end(), [&](const MapScanInfo& o) { return o.index == s.index; });
+    if (before->map_pose.x != s.map_pose.x || before->map_pose.y != s.map_pose.y ||
+        before->map_pose.yaw != s.map_pose.yaw)
       moved.push_back(s);
   }
   const std::string history = poseHistoryPath();
@@ -469,7 +486,8 @@ uint32_t MapDirectory::updatePoses(const std::vector<std::pair<uint32_t, Pose2D>
 }
 
 PointCloud MapDirectory::loadScan(size_t i) const {
-  if (i >= scans_.size()) throw IoError(dir_, "no scan " + std::to_string(i) + " in a map of " + std::to_string(scans_.size()));
+  if (i >= scans_.size())
+    throw IoError(dir_, "no scan " + std::to_string(i) + " in a map of " + std::to_string(scans_.size()));
   return readCloud(dir_ + "/" + scans_[i].file);
 }
 

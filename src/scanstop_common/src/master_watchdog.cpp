@@ -18,7 +18,8 @@ std::string seconds(double s) {
 
 }  // namespace
 
-MasterWatchdog::MasterWatchdog(std::string master_uri, double timeout_s) : uri_(std::move(master_uri)), timeout_s_(timeout_s) {
+MasterWatchdog::MasterWatchdog(std::string master_uri, double timeout_s)
+    : uri_(std::move(master_uri)), timeout_s_(timeout_s) {
   if (!std::isfinite(timeout_s) || timeout_s <= 0.0 || timeout_s > 86400.0)
     throw ConfigError("parameter 'master_timeout_s' = " + std::to_string(timeout_s) +
                       " s must be in (0, 86400] s (how long the ROS master may be unreachable)");
@@ -62,8 +63,8 @@ MasterWatchdog::Event MasterWatchdog::update(double now_s, bool reachable, long 
   }
   if (now_s - lost_since_s_ >= timeout_s_) {
     state_ = State::TimedOut;
-    message_ = master + " has been unreachable for " + seconds(now_s - lost_since_s_) + " (master_timeout_s = " +
-               seconds(timeout_s_) + ")";
+    message_ = master + " has been unreachable for " + seconds(now_s - lost_since_s_) +
+               " (master_timeout_s = " + seconds(timeout_s_) + ")";
     return Event::TimedOut;
   }
   return Event::None;
@@ -71,11 +72,16 @@ MasterWatchdog::Event MasterWatchdog::update(double now_s, bool reachable, long 
 
 const char* toString(MasterWatchdog::Event e) {
   switch (e) {
-    case MasterWatchdog::Event::None: return "none";
-    case MasterWatchdog::Event::Lost: return "lost";
-    case MasterWatchdog::Event::Back: return "back";
-    case MasterWatchdog::Event::TimedOut: return "timed out";
-    case MasterWatchdog::Event::Restarted: return "restarted";
+    case MasterWatchdog::Event::None:
+      return "none";
+    case MasterWatchdog::Event::Lost:
+      return "lost";
+    case MasterWatchdog::Event::Back:
+      return "back";
+    case MasterWatchdog::Event::TimedOut:
+      return "timed out";
+    case MasterWatchdog::Event::Restarted:
+      return "restarted";
   }
   return "?";
 }

@@ -14,7 +14,9 @@
 namespace scanstop {
 namespace {
 
-std::string shown(const std::string& text) { return text.empty() ? "''" : text.size() > 60 ? text.substr(0, 60) + "..." : text; }
+std::string shown(const std::string& text) {
+  return text.empty() ? "''" : text.size() > 60 ? text.substr(0, 60) + "..." : text;
+}
 
 std::string num(double v) {
   std::ostringstream out;
@@ -55,8 +57,10 @@ std::vector<double> parseRealListArg(const std::string& what, const std::string&
                                      double max, const std::string& form) {
   std::vector<std::string> items(1);
   for (const char c : text) {
-    if (c == ',') items.emplace_back();
-    else items.back() += c;
+    if (c == ',')
+      items.emplace_back();
+    else
+      items.back() += c;
   }
   if (items.size() != count)
     throw ConfigError(what + " " + shown(text) + ": expected " + form + " (" + std::to_string(count) +
@@ -196,14 +200,16 @@ bool Options::parseOrThrow(int argc, const char* const* argv, std::ostream& out)
   size_t next_positional = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a.size() > 1 && a[0] == '-' && !(a.size() > 1 && (std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.'))) {
+    if (a.size() > 1 && a[0] == '-' &&
+        !(a.size() > 1 && (std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.'))) {
       const Option* o = find(a);
       if (!o) throw ConfigError("unknown option " + a);
       std::string value;
       if (o->takes_value) {
         if (i + 1 >= argc) throw ConfigError(a + " needs a value");
         value = argv[++i];
-        if (value.size() > 1 && value[0] == '-' && value[1] == '-') throw ConfigError(a + " needs a value, not " + value);
+        if (value.size() > 1 && value[0] == '-' && value[1] == '-')
+          throw ConfigError(a + " needs a value, not " + value);
       }
       o->apply(value);
       continue;

@@ -31,7 +31,7 @@ struct PcdHeader {
   std::vector<char> types;
   std::vector<uint64_t> counts;
   uint64_t width = 0, height = 0, points = 0;
-  std::string data;     ///< ascii, binary or binary_compressed
+  std::string data;          ///< ascii, binary or binary_compressed
   uint64_t data_offset = 0;  ///< first byte after the DATA line
   uint64_t point_step = 0;   ///< bytes per point
 };
@@ -54,7 +54,8 @@ bool parseUnsigned(const std::string& word, uint64_t max, uint64_t& out) {
 PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path) {
   const auto fail = [&path](const std::string& what) { throw IoError(path, "not a valid PCD file: " + what); };
   // The header entries in the order the PCD format prescribes; COUNT, VIEWPOINT and POINTS are optional.
-  static const char* const kOrder[] = {"VERSION", "FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  static const char* const kOrder[] = {"VERSION", "FIELDS", "SIZE",      "TYPE",   "COUNT",
+                                       "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
   constexpr uint64_t kMaxFields = 4096, kMaxCount = 1u << 20, kMaxDim = 0xFFFFFFFFu;
   PcdHeader h;
   int last = -1;
@@ -83,7 +84,9 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
     while (k < 10 && key != kOrder[k]) ++k;
     const std::string where = "line " + std::to_string(line_no) + " (" + key.substr(0, 20) + "): ";
     if (k == 10) fail(where + "unknown header entry");
-    if (k <= last) fail(where + "repeated or out of order (the order is VERSION FIELDS SIZE TYPE COUNT WIDTH HEIGHT VIEWPOINT POINTS DATA)");
+    if (k <= last)
+      fail(where +
+           "repeated or out of order (the order is VERSION FIELDS SIZE TYPE COUNT WIDTH HEIGHT VIEWPOINT POINTS DATA)");
     if (k > 1 && last < 1) fail(where + "comes before FIELDS");
     last = k;
     seen[k] = true;
@@ -101,14 +104,16 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
     } else if (key == "SIZE") {
       perField("sizes");
       for (const auto& w : v) {
-        if (w != "1" && w != "2" && w != "4" && w != "8") fail(where + "size '" + w.substr(0, 20) + "' is not 1, 2, 4 or 8");
+        if (w != "1" && w != "2" && w != "4" && w != "8")
+          fail(where + "size '" + w.substr(0, 20) + "' is not 1, 2, 4 or 8");
         h.sizes.push_back(w[0] - '0');
       }
     } else if (key == "TYPE") {
       if (!seen[2]) fail(where + "comes before SIZE");
       perField("types");
       for (size_t i = 0; i < v.size(); ++i) {
-        if (v[i] != "I" && v[i] != "U" && v[i] != "F") fail(where + "type '" + v[i].substr(0, 20) + "' is not I, U or F");
+        if (v[i] != "I" && v[i] != "U" && v[i] != "F")
+          fail(where + "type '" + v[i].substr(0, 20) + "' is not I, U or F");
         if (v[i] == "F" && h.sizes[i] != 4 && h.sizes[i] != 8)
           fail(where + "field '" + h.fields[i] + "' is a float of " + std::to_string(h.sizes[i]) + " bytes");
         h.types.push_back(v[i][0]);
@@ -117,12 +122,14 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
       perField("counts");
       for (const auto& w : v) {
         uint64_t c = 0;
-        if (!parseUnsigned(w, kMaxCount, c) || c == 0) fail(where + "count '" + w.substr(0, 20) + "' is not 1 to " + std::to_string(kMaxCount));
+        if (!parseUnsigned(w, kMaxCount, c) || c == 0)
+          fail(where + "count '" + w.substr(0, 20) + "' is not 1 to " + std::to_string(kMaxCount));
         h.counts.push_back(c);
       }
     } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
       uint64_t n = 0;
-      if (v.size() != 1 || !parseUnsigned(v[0], kMaxDim, n)) fail(where + "needs one integer from 0 to " + std::to_string(kMaxDim));
+      if (v.size() != 1 || !parseUnsigned(v[0], kMaxDim, n))
+        fail(where + "needs one integer from 0 to " + std::to_string(kMaxDim));
       (key == "WIDTH" ? h.width : key == "HEIGHT" ? h.height : h.points) = n;
     } else if (key == "VIEWPOINT") {
       if (v.size() != 7) fail(where + "needs 7 numbers (tx ty tz qw qx qy qz)");
@@ -143,7 +150,8 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
   if (h.width * h.height > kMaxDim) fail("WIDTH x HEIGHT exceeds " + std::to_string(kMaxDim) + " points");
   if (!seen[8]) fail("the header lacks POINTS");
   if (h.points != h.width * h.height)
-    fail("WIDTH x HEIGHT = " + std::to_string(h.width) + " x " + std::to_string(h.height) + " but POINTS " + std::to_string(h.points));
+    fail("WIDTH x HEIGHT = " + std::to_string(h.width) + " x " + std::to_string(h.height) + " but POINTS " +
+         std::to_string(h.points));
   for (size_t i = 0; i < h.fields.size(); ++i) h.point_step += h.sizes[i] * h.counts[i];
   h.data_offset = offset;
   // PCL 1.13 reads on after the DATA line: an empty line or a comment is skipped, a line whose first
@@ -222,7 +230,8 @@ PcdHeader readPcdHeader(std::istream& in, uint64_t size, const std::string& path
           fail("line " + std::to_string(data_line) + ": '" + w.substr(0, 20) + "' is not a number");
       }
       if (n != values)
-        fail("line " + std::to_string(data_line) + ": " + std::to_string(n) + " values, a point has " + std::to_string(values));
+        fail("line " + std::to_string(data_line) + ": " + std::to_string(n) + " values, a point has " +
+             std::to_string(values));
       if (++points > h.points) fail("more than the " + std::to_string(h.points) + " points the header announces");
     }
     if (points < h.points)
@@ -252,32 +261,77 @@ const pcl::PCLPointField* findField(const pcl::PCLPointCloud2& blob, const std::
 /// One value of a field as a float, whatever its stored type.
 float fieldValue(const uint8_t* p, uint8_t type) {
   switch (type) {
-    case pcl::PCLPointField::INT8: { int8_t v; std::memcpy(&v, p, 1); return v; }
-    case pcl::PCLPointField::UINT8: return *p;
-    case pcl::PCLPointField::INT16: { int16_t v; std::memcpy(&v, p, 2); return v; }
-    case pcl::PCLPointField::UINT16: { uint16_t v; std::memcpy(&v, p, 2); return v; }
-    case pcl::PCLPointField::INT32: { int32_t v; std::memcpy(&v, p, 4); return static_cast<float>(v); }
-    case pcl::PCLPointField::UINT32: { uint32_t v; std::memcpy(&v, p, 4); return static_cast<float>(v); }
-    case pcl::PCLPointField::INT64: { int64_t v; std::memcpy(&v, p, 8); return static_cast<float>(v); }
-    case pcl::PCLPointField::UINT64: { uint64_t v; std::memcpy(&v, p, 8); return static_cast<float>(v); }
-    case pcl::PCLPointField::FLOAT32: { float v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::INT8: {
+      int8_t v;
+      std::memcpy(&v, p, 1);
+      return v;
+    }
+    case pcl::PCLPointField::UINT8:
+      return *p;
+    case pcl::PCLPointField::INT16: {
+      int16_t v;
+      std::memcpy(&v, p, 2);
+      return v;
+    }
+    case pcl::PCLPointField::UINT16: {
+      uint16_t v;
+      std::memcpy(&v, p, 2);
+      return v;
+    }
+    case pcl::PCLPointField::INT32: {
+      int32_t v;
+      std::memcpy(&v, p, 4);
+      return static_cast<float>(v);
+    }
+    case pcl::PCLPointField::UINT32: {
+      uint32_t v;
+      std::memcpy(&v, p, 4);
+      return static_cast<float>(v);
+    }
+    case pcl::PCLPointField::INT64: {
+      int64_t v;
+      std::memcpy(&v, p, 8);
+      return static_cast<float>(v);
+    }
+    case pcl::PCLPointField::UINT64: {
+      uint64_t v;
+      std::memcpy(&v, p, 8);
+      return static_cast<float>(v);
+    }
+    case pcl::PCLPointField::FLOAT32: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
     case pcl::PCLPointField::FLOAT64: {
       double v;
       std::memcpy(&v, p, 8);
       // Out-of-range doubles become infinities (a plain cast would be undefined).
       return std::fabs(v) > std::numeric_limits<float>::max() ? (v > 0 ? INFINITY : -INFINITY) : static_cast<float>(v);
     }
-    default: return NAN;
+    default:
+      return NAN;
   }
 }
 
 size_t fieldBytes(uint8_t type) {
   switch (type) {
-    case pcl::PCLPointField::INT8: case pcl::PCLPointField::UINT8: return 1;
-    case pcl::PCLPointField::INT16: case pcl::PCLPointField::UINT16: return 2;
-    case pcl::PCLPointField::INT32: case pcl::PCLPointField::UINT32: case pcl::PCLPointField::FLOAT32: return 4;
-    case pcl::PCLPointField::INT64: case pcl::PCLPointField::UINT64: case pcl::PCLPointField::FLOAT64: return 8;
-    default: return 0;
+    case pcl::PCLPointField::INT8:
+    case pcl::PCLPointField::UINT8:
+      return 1;
+    case pcl::PCLPointField::INT16:
+    case pcl::PCLPointField::UINT16:
+      return 2;
+    case pcl::PCLPointField::INT32:
+    case pcl::PCLPointField::UINT32:
+    case pcl::PCLPointField::FLOAT32:
+      return 4;
+    case pcl::PCLPointField::INT64:
+    case pcl::PCLPointField::UINT64:
+    case pcl::PCLPointField::FLOAT64:
+      return 8;
+    default:
+      return 0;
   }
 }
 
@@ -335,12 +389,13 @@ PointCloud readPcd(const std::string& path) {
   if (frange) cloud.ranges.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const uint8_t* p = blob.data.data() + i * blob.point_step;
-    cloud.points[i] = Eigen::Vector3f(fieldValue(p + fx->offset, fx->datatype), fieldValue(p + fy->offset, fy->datatype),
-                                      fieldValue(p + fz->offset, fz->datatype));
+    cloud.points[i] =
+        Eigen::Vector3f(fieldValue(p + fx->offset, fx->datatype), fieldValue(p + fy->offset, fy->datatype),
+                        fieldValue(p + fz->offset, fz->datatype));
     if (normals)
-      cloud.normals[i] = Eigen::Vector3f(fieldValue(p + fnx->offset, fnx->datatype),
-                                         fieldValue(p + fny->offset, fny->datatype),
-                                         fieldValue(p + fnz->offset, fnz->datatype));
+      cloud.normals[i] =
+          Eigen::Vector3f(fieldValue(p + fnx->offset, fnx->datatype), fieldValue(p + fny->offset, fny->datatype),
+                          fieldValue(p + fnz->offset, fnz->datatype));
     if (frange) cloud.ranges[i] = fieldValue(p + frange->offset, frange->datatype);
   }
   cloud.width = blob.width;
@@ -364,8 +419,12 @@ void writePcd(const std::string& path, const PointCloud& cloud) {
     fill(pc);
     for (size_t i = 0; i < cloud.size(); ++i) {
       auto& q = pc.points[i];
-      q.x = cloud.points[i].x(); q.y = cloud.points[i].y(); q.z = cloud.points[i].z();
-      q.normal_x = cloud.normals[i].x(); q.normal_y = cloud.normals[i].y(); q.normal_z = cloud.normals[i].z();
+      q.x = cloud.points[i].x();
+      q.y = cloud.points[i].y();
+      q.z = cloud.points[i].z();
+      q.normal_x = cloud.normals[i].x();
+      q.normal_y = cloud.normals[i].y();
+      q.normal_z = cloud.normals[i].z();
       q.curvature = 0.0f;
     }
     result = pcl::io::savePCDFileBinary(tmp, pc);
@@ -374,7 +433,9 @@ void writePcd(const std::string& path, const PointCloud& cloud) {
     fill(pc);
     for (size_t i = 0; i < cloud.size(); ++i) {
       auto& q = pc.points[i];
-      q.x = cloud.points[i].x(); q.y = cloud.points[i].y(); q.z = cloud.points[i].z();
+      q.x = cloud.points[i].x();
+      q.y = cloud.points[i].y();
+      q.z = cloud.points[i].z();
       q.range = cloud.ranges[i];
     }
     result = pcl::io::savePCDFileBinary(tmp, pc);
@@ -383,7 +444,9 @@ void writePcd(const std::string& path, const PointCloud& cloud) {
     fill(pc);
     for (size_t i = 0; i < cloud.size(); ++i) {
       auto& q = pc.points[i];
-      q.x = cloud.points[i].x(); q.y = cloud.points[i].y(); q.z = cloud.points[i].z();
+      q.x = cloud.points[i].x();
+      q.y = cloud.points[i].y();
+      q.z = cloud.points[i].z();
     }
     result = pcl::io::savePCDFileBinary(tmp, pc);
   }

@@ -20,11 +20,11 @@ enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64
 
 bool parsePlyType(const std::string& name, PlyType& type) {
   static const std::pair<const char*, PlyType> kTypes[] = {
-      {"char", PlyType::Int8},     {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
-      {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},     {"int16", PlyType::Int16},
-      {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
-      {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
-      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"char", PlyType::Int8},      {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},    {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},    {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32},  {"float32", PlyType::Float32}, {"double", PlyType::Float64},
       {"float64", PlyType::Float64}};
   for (const auto& t : kTypes) {
     if (name == t.first) {
@@ -38,13 +38,17 @@ bool parsePlyType(const std::string& name, PlyType& type) {
 size_t plySize(PlyType t) {
   switch (t) {
     case PlyType::Int8:
-    case PlyType::UInt8: return 1;
+    case PlyType::UInt8:
+      return 1;
     case PlyType::Int16:
-    case PlyType::UInt16: return 2;
+    case PlyType::UInt16:
+      return 2;
     case PlyType::Int32:
     case PlyType::UInt32:
-    case PlyType::Float32: return 4;
-    case PlyType::Float64: return 8;
+    case PlyType::Float32:
+      return 4;
+    case PlyType::Float64:
+      return 8;
   }
   return 0;
 }
@@ -77,14 +81,40 @@ class PlyBody {
     pos_ += n;
     if (format_ == 2) std::reverse(buf, buf + n);
     switch (t) {
-      case PlyType::Int8: return static_cast<int8_t>(buf[0]);
-      case PlyType::UInt8: return buf[0];
-      case PlyType::Int16: { int16_t v; std::memcpy(&v, buf, 2); return v; }
-      case PlyType::UInt16: { uint16_t v; std::memcpy(&v, buf, 2); return v; }
-      case PlyType::Int32: { int32_t v; std::memcpy(&v, buf, 4); return v; }
-      case PlyType::UInt32: { uint32_t v; std::memcpy(&v, buf, 4); return v; }
-      case PlyType::Float32: { float v; std::memcpy(&v, buf, 4); return v; }
-      case PlyType::Float64: { double v; std::memcpy(&v, buf, 8); return v; }
+      case PlyType::Int8:
+        return static_cast<int8_t>(buf[0]);
+      case PlyType::UInt8:
+        return buf[0];
+      case PlyType::Int16: {
+        int16_t v;
+        std::memcpy(&v, buf, 2);
+        return v;
+      }
+      case PlyType::UInt16: {
+        uint16_t v;
+        std::memcpy(&v, buf, 2);
+        return v;
+      }
+      case PlyType::Int32: {
+        int32_t v;
+        std::memcpy(&v, buf, 4);
+        return v;
+      }
+      case PlyType::UInt32: {
+        uint32_t v;
+        std::memcpy(&v, buf, 4);
+        return v;
+      }
+      case PlyType::Float32: {
+        float v;
+        std::memcpy(&v, buf, 4);
+        return v;
+      }
+      case PlyType::Float64: {
+        double v;
+        std::memcpy(&v, buf, 8);
+        return v;
+      }
     }
     return 0.0;
   }
@@ -134,10 +164,14 @@ TriangleMesh parsePly(const std::string& data, const std::string& name) {
     if (word == "format") {
       std::string f;
       words >> f;
-      if (f == "ascii") format = 0;
-      else if (f == "binary_little_endian") format = 1;
-      else if (f == "binary_big_endian") format = 2;
-      else throw IoError(name, "malformed PLY: unknown format '" + f + "'");
+      if (f == "ascii")
+        format = 0;
+      else if (f == "binary_little_endian")
+        format = 1;
+      else if (f == "binary_big_endian")
+        format = 2;
+      else
+        throw IoError(name, "malformed PLY: unknown format '" + f + "'");
     } else if (word == "element") {
       PlyElement e;
       long long count = -1;
@@ -230,8 +264,8 @@ TriangleMesh parsePly(const std::string& data, const std::string& name) {
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     for (int k = 0; k < 3; ++k) {
       if (mesh.faces[f][k] < 0 || mesh.faces[f][k] >= nv)
-        throw IoError(name, "PLY face " + std::to_string(f) + " refers to vertex " +
-                                std::to_string(mesh.faces[f][k]) + " of " + std::to_string(nv));
+        throw IoError(name, "PLY face " + std::to_string(f) + " refers to vertex " + std::to_string(mesh.faces[f][k]) +
+                                " of " + std::to_string(nv));
     }
   }
   return mesh;
@@ -258,7 +292,8 @@ void writePly(const std::string& path, const TriangleMesh& mesh, bool binary) {
   header << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\ncomment scanstop\n"
          << "element vertex " << mesh.vertices.size() << "\nproperty float x\nproperty float y\nproperty float z\n";
   if (normals) header << "property float nx\nproperty float ny\nproperty float nz\n";
-  if (!mesh.faces.empty()) header << "element face " << mesh.faces.size() << "\nproperty list uchar int vertex_indices\n";
+  if (!mesh.faces.empty())
+    header << "element face " << mesh.faces.size() << "\nproperty list uchar int vertex_indices\n";
   header << "end_header\n";
   std::string out = header.str();
   if (binary) {
@@ -317,8 +352,8 @@ PointCloud parseXyz(const std::string& data, const std::string& path) {
     }
     if (v.empty()) continue;
     if (v.size() != 3 && v.size() != 6)
-      throw IoError(path, "line " + std::to_string(line_no) + ": expected 3 (x y z) or 6 (x y z nx ny nz) values, found " +
-                              std::to_string(v.size()));
+      throw IoError(path, "line " + std::to_string(line_no) +
+                              ": expected 3 (x y z) or 6 (x y z nx ny nz) values, found " + std::to_string(v.size()));
     if (columns < 0) columns = static_cast<int>(v.size());
     if (static_cast<int>(v.size()) != columns)
       throw IoError(path, "line " + std::to_string(line_no) + ": " + std::to_string(v.size()) +
@@ -337,7 +372,8 @@ void writeXyz(const std::string& path, const PointCloud& cloud) {
   for (size_t i = 0; i < cloud.size(); ++i) {
     const auto& p = cloud.points[i];
     out << p.x() << ' ' << p.y() << ' ' << p.z();
-    if (cloud.hasNormals()) out << ' ' << cloud.normals[i].x() << ' ' << cloud.normals[i].y() << ' ' << cloud.normals[i].z();
+    if (cloud.hasNormals())
+      out << ' ' << cloud.normals[i].x() << ' ' << cloud.normals[i].y() << ' ' << cloud.normals[i].z();
     out << '\n';
   }
   writeFileAtomic(path, out.str());
@@ -367,8 +403,9 @@ PointCloud readCloud(const std::string& path) {
   if (ext == "pcd") return checked(readPcd(path));
   if (ext == "ply") return checked(readPlyCloud(path));
   if (ext == "xyz" || ext == "txt") return checked(readXyz(path));
-  throw IoError(path, ext.empty() ? std::string("no file extension: unknown point-cloud format (expected .pcd, .ply or .xyz)")
-                                  : "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
+  throw IoError(path, ext.empty()
+                          ? std::string("no file extension: unknown point-cloud format (expected .pcd, .ply or .xyz)")
+                          : "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
 }
 
 void writeCloud(const std::string& path, const PointCloud& cloud) {
@@ -378,8 +415,9 @@ void writeCloud(const std::string& path, const PointCloud& cloud) {
   if (ext == "pcd") return writePcd(path, cloud);
   if (ext == "ply") return writePlyCloud(path, cloud, true);
   if (ext == "xyz" || ext == "txt") return writeXyz(path, cloud);
-  throw IoError(path, ext.empty() ? std::string("no file extension: unknown point-cloud format (expected .pcd, .ply or .xyz)")
-                                  : "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
+  throw IoError(path, ext.empty()
+                          ? std::string("no file extension: unknown point-cloud format (expected .pcd, .ply or .xyz)")
+                          : "unknown point-cloud format '." + ext + "' (expected .pcd, .ply or .xyz)");
 }
 
 TriangleMesh readMesh(const std::string& path) {

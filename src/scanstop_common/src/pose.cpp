@@ -17,8 +17,7 @@ double normalizeAngle(double angle_rad) {
 
 Pose2D Pose2D::operator*(const Pose2D& other) const {
   const double c = std::cos(yaw), s = std::sin(yaw);
-  return Pose2D(x + c * other.x - s * other.y, y + s * other.x + c * other.y,
-                normalizeAngle(yaw + other.yaw));
+  return Pose2D(x + c * other.x - s * other.y, y + s * other.x + c * other.y, normalizeAngle(yaw + other.yaw));
 }
 
 Pose2D Pose2D::inverse() const {

@@ -39,12 +39,12 @@ TriangleMesh parseBinary(const std::string& data, const std::string& name) {
   const size_t expected = kHeaderBytes + kTriangleBytes * static_cast<size_t>(count);
   if (data.size() < expected)
     throw IoError(name, "truncated binary STL: the header announces " + std::to_string(count) + " triangles (" +
-                            std::to_string(expected) + " bytes) but the file has only " +
-                            std::to_string(data.size()) + " bytes");
+                            std::to_string(expected) + " bytes) but the file has only " + std::to_string(data.size()) +
+                            " bytes");
   if (data.size() > expected)
-    throw IoError(name, "not a valid binary STL: the header announces " + std::to_string(count) +
-                            " triangles (" + std::to_string(expected) + " bytes) but the file has " +
-                            std::to_string(data.size()) + " bytes");
+    throw IoError(name, "not a valid binary STL: the header announces " + std::to_string(count) + " triangles (" +
+                            std::to_string(expected) + " bytes) but the file has " + std::to_string(data.size()) +
+                            " bytes");
   if (count == 0) throw IoError(name, "empty STL: no triangles");
   TriangleMesh mesh;
   mesh.vertices.reserve(3 * static_cast<size_t>(count));

@@ -116,8 +116,9 @@ TEST(CloudIo, MalformedInputsNameFileAndProblem) {
   expectIoError([&] { readCloud(xyz); }, xyz, "line 2: expected 3");
   const std::string xyz2 = dir.write("bad2.xyz", "1 2 3\n4 five 6\n");
   expectIoError([&] { readCloud(xyz2); }, xyz2, "'five' is not a number");
-  const std::string ply = dir.write("bad.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                                               "property float y\nproperty float z\nend_header\n1 2 3\n4 5 6\n");
+  const std::string ply = dir.write("bad.ply",
+                                    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                    "property float y\nproperty float z\nend_header\n1 2 3\n4 5 6\n");
   expectIoError([&] { readCloud(ply); }, ply, "truncated PLY");
   const std::string notply = dir.write("x.ply", "hello");
   expectIoError([&] { readCloud(notply); }, notply, "not a PLY file");
@@ -134,16 +135,18 @@ TEST(CloudIo, MalformedInputsNameFileAndProblem) {
 // Issue #22 class 3: a point at 1e30 m went into fuse_map's and plan_step's grids unnoticed.
 TEST(CloudIo, CoordinatesBeyondTheLimitAreRefusedNamingThePoint) {
   TempDir dir;
-  const std::string pcd = dir.write("far.pcd",
-                                    "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-                                    "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n1 0 0\n0 1 0\n1e30 0 0\n");
+  const std::string pcd =
+      dir.write("far.pcd",
+                "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n1 0 0\n0 1 0\n1e30 0 0\n");
   expectIoError([&] { readCloud(pcd); }, pcd, "point 2 (1e+30, 0, 0) lies beyond the 100000 m coordinate limit");
   const std::string xyz = dir.write("inf.xyz", "1 2 3\nnan nan nan\n4 -inf 6\n");
   expectIoError([&] { readCloud(xyz); }, xyz, "point 2 (4, -inf, 6) lies beyond the 100000 m coordinate limit");
-  const std::string mesh = dir.write("far.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                                                "property float y\nproperty float z\nelement face 1\n"
-                                                "property list uchar int vertex_indices\nend_header\n"
-                                                "0 0 0\n1 0 0\n0 200000 0\n3 0 1 2\n");
+  const std::string mesh = dir.write("far.ply",
+                                     "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                     "property float y\nproperty float z\nelement face 1\n"
+                                     "property list uchar int vertex_indices\nend_header\n"
+                                     "0 0 0\n1 0 0\n0 200000 0\n3 0 1 2\n");
   expectIoError([&] { readMesh(mesh); }, mesh, "vertex 2 (0, 200000, 0) lies beyond the 100000 m coordinate limit");
   // NaN points (missing returns of an organized scan) and points within the limit are kept.
   const std::string ok = dir.write("ok.xyz", "1 2 3\nnan nan nan\n99999 -99999 0\n");
@@ -188,27 +191,28 @@ TEST(CloudIo, PcdFuzzFindings) {
   // 1. PCL 1.13's PCDReader::readBodyBinary overflowed a 12-byte heap buffer (ASan heap-buffer-overflow
   //    in memcpy) on a binary_compressed file whose header has no SIZE/TYPE lines and a garbled FIELDS
   //    line. Our header check now rejects it before PCL sees it.
-  const std::string overflow = dir.write(
-      "overflow.pcd", std::string("VERSION 0.7\nFIELDS x y zIELDS x y ") + bytes({0x10, 0x00}) +
-                          "TYPE1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA binary_compressed\n" +
-                          bytes({0x0d, 0, 0, 0, 0x0c, 0, 0, 0, 0x0b, 0, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}));
+  const std::string overflow =
+      dir.write("overflow.pcd",
+                std::string("VERSION 0.7\nFIELDS x y zIELDS x y ") + bytes({0x10, 0x00}) +
+                    "TYPE1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA binary_compressed\n" +
+                    bytes({0x0d, 0, 0, 0, 0x0c, 0, 0, 0, 0x0b, 0, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}));
   expectIoError([&] { readPcd(overflow); }, overflow, "the header lacks SIZE or TYPE");
   // 2. Our own header check (first version) read the SIZE list for a TYPE line when SIZE was missing
   //    (UBSan: reference binding to null pointer in std::vector::operator[]).
-  const std::string type_first = dir.write(
-      "type_first.pcd", std::string("VERSION 0.7\nFIELDS 4 4\nTYPE F Fary_compressed\n") +
-                            bytes({0x0d, 0, 0, 0, 0x0c, 0, 0, 'T', 'H', ' ', '2', '\n', 'H', 'P', 'E', ' ', 'F', ' ',
-                                   'F', 'a', 0, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}));
+  const std::string type_first =
+      dir.write("type_first.pcd",
+                std::string("VERSION 0.7\nFIELDS 4 4\nTYPE F Fary_compressed\n") +
+                    bytes({0x0d, 0,   0,   0,   0x0c, 0, 0,    'T',  'H', ' ', '2', '\n', 'H', 'P', 'E',  ' ',
+                           'F',  ' ', 'F', 'a', 0,    0, 0x80, 0x3f, 0,   0,   0,   0x40, 0,   0,   0x40, 0x40}));
   expectIoError([&] { readPcd(type_first); }, type_first, "comes before SIZE");
   // 3. PCL 1.13's PCDReader::read requested a ~100 TB allocation (ASan allocation-size-too-big) for an
   //    ASCII PCD with a valid header and garbage data lines. Data lines are now checked first.
   const std::string garbage = dir.write(
-      "garbage_ascii.pcd",
-      std::string("# .PCD z0loul Data:f") + bytes({8, 0, 0, 0, 0, 0, 0, 0}) +
-          "IELDS x y z0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
-          "VIEWPOINT 1 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n# .PVERSI" + std::string(19, '\xff') + "t\x02VER" +
-          bytes({0xad, 0xb6, 0xb3, 0xb8}) + " 0.7\nFIELDS" + bytes({1, 0, 0}) +
-          "\nIO RSI .7CD v0.Xv- Poi 2\nVIEWPOINT 0 0 0 1");
+      "garbage_ascii.pcd", std::string("# .PCD z0loul Data:f") + bytes({8, 0, 0, 0, 0, 0, 0, 0}) +
+                               "IELDS x y z0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                               "VIEWPOINT 1 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n# .PVERSI" +
+                               std::string(19, '\xff') + "t\x02VER" + bytes({0xad, 0xb6, 0xb3, 0xb8}) + " 0.7\nFIELDS" +
+                               bytes({1, 0, 0}) + "\nIO RSI .7CD v0.Xv- Poi 2\nVIEWPOINT 0 0 0 1");
   // (Refused before its data lines are read: PCL would take the line after the comment for a FIELDS line.)
   expectIoError([&] { readPcd(garbage); }, garbage, "which PCL would read as a header line");
   // 4. PCL 1.13 reads header lines after DATA too: binary data starting "DATA" was taken for a second
@@ -219,11 +223,11 @@ TEST(CloudIo, PcdFuzzFindings) {
       std::string("# .PCD v0.7TY - Point Cloud Data file foVERt\nVERSION 0.7\nFIELDS .x y zr ange\nSIZE 4 4 4 4\n"
                   "TYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 2\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA binary\n") +
           bytes({0x44, 0x41, 0x54, 0x41, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
-                                   0x00, 0x00, 0x45, 0x52, 0x53, 0x49, 0x4f, 0x4e, 0x20, 0x43, 0x31, 0x0a, 0x43, 0x4f, 0x4c, 0x55,
-                                   0x4d, 0x4e, 0x53, 0x80, 0x3f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00,
-                                   0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0xc0,
-                                   0x7f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x35, 0x00,
-                                   0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x40, 0x00, 0x00, 0x00, 0x40}));
+                 0x00, 0x00, 0x45, 0x52, 0x53, 0x49, 0x4f, 0x4e, 0x20, 0x43, 0x31, 0x0a, 0x43, 0x4f, 0x4c, 0x55,
+                 0x4d, 0x4e, 0x53, 0x80, 0x3f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0x00,
+                 0x00, 0x00, 0x00, 0x80, 0x3f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0xc0,
+                 0x7f, 0x00, 0x00, 0xc0, 0x7f, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x35, 0x00,
+                 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x40, 0x00, 0x00, 0x00, 0x40}));
   expectIoError([&] { readPcd(second_data); }, second_data, "the data begins with 'DATA");
   // Binary data that merely starts with a comment character or a newline is data (PCL skips such
   // lines and keeps the data where the DATA line put it).
@@ -234,9 +238,11 @@ TEST(CloudIo, PcdFuzzFindings) {
   const std::string hash_file = dir.file("hash_first.pcd");
   writePcd(hash_file, hash_first);
   EXPECT_EQ(readPcd(hash_file).points.at(0).x(), hash_first.points[0].x());
-  const std::string short_ascii = dir.write("short.pcd", std::string(kAsciiHead) + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1.000 2.000 3.000\n\n");
+  const std::string short_ascii = dir.write(
+      "short.pcd", std::string(kAsciiHead) + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1.000 2.000 3.000\n\n");
   expectIoError([&] { readPcd(short_ascii); }, short_ascii, "truncated PCD: 1 of 2 points");
-  const std::string wide = dir.write("wide.pcd", std::string(kAsciiHead) + "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 4\n");
+  const std::string wide =
+      dir.write("wide.pcd", std::string(kAsciiHead) + "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 4\n");
   expectIoError([&] { readPcd(wide); }, wide, "line 9: 4 values, a point has 3");
 }
 
@@ -244,28 +250,31 @@ TEST(CloudIo, PcdFuzzFindings) {
 // with fewer normals than vertices.
 TEST(CloudIo, PlyFuzzFindings) {
   TempDir dir;
-  const std::string two = dir.write(
-      "two_vertex.ply",
-      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
-      "property float nx\nproperty float ny\nproperty float nz\nelement vertex 1\nproperty float x\n"
-      "property float y\nproperty float z\nend_header\n0 0 0 0 0 1\n1 1 1\n");
+  const std::string two =
+      dir.write("two_vertex.ply",
+                "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                "property float nx\nproperty float ny\nproperty float nz\nelement vertex 1\nproperty float x\n"
+                "property float y\nproperty float z\nend_header\n0 0 0 0 0 1\n1 1 1\n");
   expectIoError([&] { readPly(two); }, two, "a second 'vertex' element");
   // A face index out of int range or a NaN list count was cast to an integer (UBSan: undefined behaviour).
-  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                           "property float z\nelement face 1\nproperty list float double vertex_indices\nend_header\n"
-                           "0 0 0\n1 0 0\n0 1 0\n";
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list float double vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n";
   const std::string huge = dir.write("huge_index.ply", head + "3 0 1 1e300\n");
   expectIoError([&] { readPly(huge); }, huge, "PLY face 0 refers to vertex -1 of 3");
   const std::string nan_count = dir.write("nan_count.ply", head + "nan 0 1 2\n");
   expectIoError([&] { readPly(nan_count); }, nan_count, "malformed PLY: list of nan items");
   // A huge element count: bounded by the data instead of looping or reserving gigabytes (timeout).
-  const std::string many = dir.write("many.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n"
-                                                 "property float x\nproperty float y\nproperty float z\nend_header\n" +
-                                                 std::string(24, '\0'));
+  const std::string many = dir.write("many.ply",
+                                     "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n"
+                                     "property float x\nproperty float y\nproperty float z\nend_header\n" +
+                                         std::string(24, '\0'));
   expectIoError([&] { readPly(many); }, many, "truncated PLY: element 'vertex' announces 1000000000 items");
-  const std::string empty_el = dir.write("empty_element.ply", "ply\nformat ascii 1.0\nelement junk 4000000000\n"
-                                                              "element vertex 1\nproperty float x\nproperty float y\n"
-                                                              "property float z\nend_header\n1 2 3\n");
+  const std::string empty_el = dir.write("empty_element.ply",
+                                         "ply\nformat ascii 1.0\nelement junk 4000000000\n"
+                                         "element vertex 1\nproperty float x\nproperty float y\n"
+                                         "property float z\nend_header\n1 2 3\n");
   EXPECT_EQ(readPly(empty_el).vertices.size(), 1u);
 }
 
@@ -274,19 +283,23 @@ TEST(CloudIo, PcdHeaderIsCheckedBeforePcl) {
   TempDir dir;
   const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
   const auto pcd = [&](const std::string& name, const std::string& text) { return dir.write(name, text); };
-  const std::string p1 = pcd("huge_ascii.pcd", head + "WIDTH 1000000000\nHEIGHT 1\nPOINTS 1000000000\nDATA ascii\n1 2 3\n");
+  const std::string p1 =
+      pcd("huge_ascii.pcd", head + "WIDTH 1000000000\nHEIGHT 1\nPOINTS 1000000000\nDATA ascii\n1 2 3\n");
   expectIoError([&] { readPcd(p1); }, p1, "truncated PCD: 1000000000 points announced");
   const std::string p2 = pcd("mismatch.pcd", head + "WIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n1 2 3\n1 2 3\n1 2 3\n");
   expectIoError([&] { readPcd(p2); }, p2, "WIDTH x HEIGHT = 2 x 2 but POINTS 3");
-  const std::string p3 = pcd("size3.pcd", "FIELDS x y z\nSIZE 4 3 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  const std::string p3 =
+      pcd("size3.pcd", "FIELDS x y z\nSIZE 4 3 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
   expectIoError([&] { readPcd(p3); }, p3, "size '3' is not 1, 2, 4 or 8");
-  const std::string p4 = pcd("order.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nHEIGHT 1\nWIDTH 1\nDATA ascii\n1 2 3\n");
+  const std::string p4 =
+      pcd("order.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nHEIGHT 1\nWIDTH 1\nDATA ascii\n1 2 3\n");
   expectIoError([&] { readPcd(p4); }, p4, "line 5 (WIDTH): repeated or out of order");
   const std::string p5 = pcd("types.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
   expectIoError([&] { readPcd(p5); }, p5, "2 types for 3 fields");
   const std::string p6 = pcd("nodata.pcd", head + "WIDTH 1\nHEIGHT 1\n");
   expectIoError([&] { readPcd(p6); }, p6, "without a DATA line");
-  const std::string p7 = pcd("float2.pcd", "FIELDS x y z\nSIZE 4 4 2\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  const std::string p7 =
+      pcd("float2.pcd", "FIELDS x y z\nSIZE 4 4 2\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
   expectIoError([&] { readPcd(p7); }, p7, "field 'z' is a float of 2 bytes");
   // Compressed: the unpacked size must match the points, the packed bytes must be there.
   const std::string raw = f32(1) + f32(2) + f32(3);
@@ -312,8 +325,9 @@ TEST(CloudIo, PcdHeaderIsCheckedBeforePcl) {
 // Field types other than float32 are converted (PCL's fromPCLPointCloud2 silently left such points at 0).
 TEST(CloudIo, PcdWithDoubleAndIntegerFields) {
   TempDir dir;
-  const std::string p = dir.write("d.pcd", "FIELDS x y z range\nSIZE 8 8 8 2\nTYPE F F F U\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary\n" +
-                                               f64(1.5) + f64(-2.25) + f64(1e300) + bytes({7, 1}));
+  const std::string p =
+      dir.write("d.pcd", "FIELDS x y z range\nSIZE 8 8 8 2\nTYPE F F F U\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary\n" +
+                             f64(1.5) + f64(-2.25) + f64(1e300) + bytes({7, 1}));
   const PointCloud c = readPcd(p);
   ASSERT_EQ(c.size(), 1u);
   EXPECT_EQ(c.points[0].x(), 1.5f);
@@ -321,9 +335,11 @@ TEST(CloudIo, PcdWithDoubleAndIntegerFields) {
   EXPECT_TRUE(std::isinf(c.points[0].z()));  // out of float range: infinite, not undefined
   ASSERT_TRUE(c.hasRanges());
   EXPECT_EQ(c.ranges[0], 263.0f);
-  const std::string empty = dir.write("e.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA binary\n");
+  const std::string empty =
+      dir.write("e.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA binary\n");
   EXPECT_EQ(readPcd(empty).size(), 0u);
-  const std::string nopoints = dir.write("n.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
+  const std::string nopoints =
+      dir.write("n.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n");
   expectIoError([&] { readPcd(nopoints); }, nopoints, "the header lacks POINTS");
 }
 
@@ -352,7 +368,8 @@ TEST(CloudIo, EveryWriterIsAtomic) {
   // A failed rename (the target is a directory) removes the temporary file, in every format.
   for (const char* name : {"d.pcd", "d.ply", "d.xyz"}) {
     ASSERT_EQ(::mkdir(dir.file(name).c_str(), 0755), 0);
-    expectIoError([&] { writeCloud(dir.file(name), cloud); }, dir.file(name), "cannot rename temporary file into place");
+    expectIoError([&] { writeCloud(dir.file(name), cloud); }, dir.file(name),
+                  "cannot rename temporary file into place");
   }
   ASSERT_EQ(::mkdir(dir.file("d.stl").c_str(), 0755), 0);
   expectIoError([&] { writeMesh(dir.file("d.stl"), mesh); }, dir.file("d.stl"), "cannot rename");
@@ -374,10 +391,10 @@ TEST(CloudIoRealData, RoomScans) {
 }
 
 TEST(CloudIoRealData, BunnyScansAndReference) {
-  const std::pair<const char*, size_t> scans[] = {
-      {"bun000.ply", 40256}, {"bun045.ply", 40097}, {"bun090.ply", 30379}, {"bun180.ply", 40251},
-      {"bun270.ply", 31701}, {"bun315.ply", 35336}, {"chin.ply", 37738},   {"ear_back.ply", 32193},
-      {"top2.ply", 38298},   {"top3.ply", 36023}};
+  const std::pair<const char*, size_t> scans[] = {{"bun000.ply", 40256}, {"bun045.ply", 40097},   {"bun090.ply", 30379},
+                                                  {"bun180.ply", 40251}, {"bun270.ply", 31701},   {"bun315.ply", 35336},
+                                                  {"chin.ply", 37738},   {"ear_back.ply", 32193}, {"top2.ply", 38298},
+                                                  {"top3.ply", 36023}};
   for (const auto& s : scans) {
     const PointCloud c = readCloud(sharedDataPath(std::string("bunny/scans/") + s.first));
     EXPECT_EQ(c.size(), s.second) << s.first;

@@ -13,10 +13,15 @@ namespace {
 TEST(FuzzFinding, NamesWhatWentWrongAndGivesTheInputInHex) {
   test::TempDir tmp;
   const std::string unit = tmp.file("crash-1");
-  std::ofstream(unit, std::ios::binary) << std::string("\x0c\x01" "ab", 4);
-  const std::string log = "INFO: Seed: 1\n#16001 REDUCE cov: 1697\nfuzz invariant violated: kept indices increase\n"
-                          "==1== ERROR: libFuzzer: deadly signal\n    #0 0x55 in abort\nSUMMARY: libFuzzer: deadly signal\n"
-                          "artifact_prefix='x/'; Test unit written to " + unit + "\n";
+  std::ofstream(unit, std::ios::binary) << std::string(
+      "\x0c\x01"
+      "ab",
+      4);
+  const std::string log =
+      "INFO: Seed: 1\n#16001 REDUCE cov: 1697\nfuzz invariant violated: kept indices increase\n"
+      "==1== ERROR: libFuzzer: deadly signal\n    #0 0x55 in abort\nSUMMARY: libFuzzer: deadly signal\n"
+      "artifact_prefix='x/'; Test unit written to " +
+      unit + "\n";
   const std::string found = fuzzFinding(log);
   EXPECT_NE(found.find("fuzz invariant violated: kept indices increase"), std::string::npos) << found;
   EXPECT_NE(found.find("SUMMARY: libFuzzer: deadly signal"), std::string::npos) << found;

@@ -116,8 +116,8 @@ class CommonFuzz : public ::testing::Test {
     const std::string log = dir_ + "/fuzz.log";
     const std::string command = std::string(FUZZER_DIR) + "/" + name + "_fuzzer -runs=" + std::to_string(runs_wanted) +
                                 " -max_total_time=" + std::to_string(seconds) +
-                                " -seed=1 -timeout=10 -rss_limit_mb=2048 -max_len=4096" +
-                                " -artifact_prefix=" + dir_ + "/ " + dir_ + "/corpus > " + log + " 2>&1";
+                                " -seed=1 -timeout=10 -rss_limit_mb=2048 -max_len=4096" + " -artifact_prefix=" + dir_ +
+                                "/ " + dir_ + "/corpus > " + log + " 2>&1";
     const int status = std::system(command.c_str());
     std::ifstream in(log);
     const std::string output((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -1,9 +1,9 @@
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <cmath>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
+#include <cmath>
 
 #include <cstdio>
 #include <fstream>
@@ -245,18 +245,17 @@ TEST(MapDirectory, BadValuesInPosesAreReportedByLine) {
   dropJournal(dir);
   const std::string poses = dir + "/poses.csv";
   const std::string tail = ",0,0,0,0,0,0,0,0,0,1,0,0,0,0";
-  replaceLine(poses, 2, "-1,scans/scan_0000.pcd,0" + tail);              // negative index
-  replaceLine(poses, 3, "1e300,scans/scan_0001.pcd,0" + tail);           // huge index
-  replaceLine(poses, 4, "2,../../etc/passwd,0" + tail);                  // outside the directory
-  replaceLine(poses, 5, "3,scans/scan_0003.pcd,nan" + tail);             // NaN stamp
+  replaceLine(poses, 2, "-1,scans/scan_0000.pcd,0" + tail);                        // negative index
+  replaceLine(poses, 3, "1e300,scans/scan_0001.pcd,0" + tail);                     // huge index
+  replaceLine(poses, 4, "2,../../etc/passwd,0" + tail);                            // outside the directory
+  replaceLine(poses, 5, "3,scans/scan_0003.pcd,nan" + tail);                       // NaN stamp
   replaceLine(poses, 6, "1,scans/scan_0001.pcd,0,0,0,0,0,0,0,0,0,0,1,2.5,0,0,0");  // fractional count
   const MapDirectory map(dir);
   ASSERT_EQ(map.problems().size(), 5u + 2u);  // five lines, then the scan files no line names (2 and 4)
-  const char* const expected[] = {"line 2: column 1 ('-1') is not an integer",
-                                  "line 3: column 1 ('1e300') is not an integer",
-                                  "line 4: scan file name '../../etc/passwd' must be a relative path",
-                                  "line 5: column 3 ('nan') is not a finite number",
-                                  "line 6: column 14 ('2.5') is not an integer"};
+  const char* const expected[] = {
+      "line 2: column 1 ('-1') is not an integer", "line 3: column 1 ('1e300') is not an integer",
+      "line 4: scan file name '../../etc/passwd' must be a relative path",
+      "line 5: column 3 ('nan') is not a finite number", "line 6: column 14 ('2.5') is not an integer"};
   for (size_t i = 0; i < 5; ++i) {
     EXPECT_EQ(map.problems()[i].path, poses);
     EXPECT_NE(map.problems()[i].problem.find(expected[i]), std::string::npos) << map.problems()[i].message();
@@ -301,10 +300,11 @@ TEST(MapDirectory, LineNamingAnotherScansFileIsNeverOverwritten) {
   std::ofstream(poses, std::ios::app) << "7,scans/scan_0000.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
   const MapDirectory third(dir);
   EXPECT_EQ(indices(third), (std::vector<uint32_t>{0, 3}));
-  const std::string expected = poses + ": line 5: file scans/scan_0000.pcd already belongs to scan 0 (line 2); line skipped";
-  EXPECT_TRUE(std::any_of(third.problems().begin(), third.problems().end(),
-                          [&](const MapProblem& p) { return p.message() == expected; }))
-      << third.problems().front().message();
+  const std::string expected =
+      poses + ": line 5: file scans/scan_0000.pcd already belongs to scan 0 (line 2); line skipped";
+  EXPECT_TRUE(std::any_of(third.problems().begin(), third.problems().end(), [&](const MapProblem& p) {
+    return p.message() == expected;
+  })) << third.problems().front().message();
 }
 
 TEST(MapDirectory, AFileNameSpelledAnotherWayIsStillThatFile) {
@@ -424,7 +424,7 @@ TEST(ScanLedger, CorruptPosesPlusRestartKeepsEveryScanExactlyOnce) {
   const std::string poses = dir + "/poses.csv";
   const std::vector<MapScanInfo> before = MapDirectory(dir).scans();
   ASSERT_EQ(before.size(), 8u);
-  replaceLine(poses, 7, "5,scans/scan_0005.pcd,200,#garbage#");                 // scan 5's line
+  replaceLine(poses, 7, "5,scans/scan_0005.pcd,200,#garbage#");  // scan 5's line
   const std::string text = readFile(poses);
   std::ofstream(poses, std::ios::binary | std::ios::trunc) << text.substr(0, text.find("\n7,") + 2);  // "7," left
   PointCloud cloud;
@@ -436,11 +436,14 @@ TEST(ScanLedger, CorruptPosesPlusRestartKeepsEveryScanExactlyOnce) {
     std::vector<std::string> messages;
     for (const MapProblem& p : restarted.problems()) messages.push_back(p.message());
     ASSERT_EQ(messages.size(), 4u) << messages.front();
-    EXPECT_NE(messages[2].find(poses + ": scan 5 has no valid line in poses.csv; restored from poses_journal.csv line 7"),
-              std::string::npos) << messages[2];
+    EXPECT_NE(
+        messages[2].find(poses + ": scan 5 has no valid line in poses.csv; restored from poses_journal.csv line 7"),
+        std::string::npos)
+        << messages[2];
     EXPECT_NE(messages[3].find("scan 7 has no valid line in poses.csv; restored from poses_journal.csv line 9"),
-              std::string::npos) << messages[3];
-    EXPECT_EQ(restarted.nextIndex(), 8u);  // not 7: scan 7's file is never overwritten
+              std::string::npos)
+        << messages[3];
+    EXPECT_EQ(restarted.nextIndex(), 8u);               // not 7: scan 7's file is never overwritten
     restarted.append(info(8, Pose2D(8, 0, 0)), cloud);  // the mission resumes: the next scan
   }
   const MapDirectory again(dir);
@@ -518,15 +521,22 @@ TEST(ScanLedger, JournalLinesThatCannotBeTrustedAreNamedAndNotRestored) {
   }
   std::ofstream(journal, std::ios::app) << "4,scans/scan_0002.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0\n";
   replaceLine(poses, 3, "1,scans/scan_0003.pcd,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0");  // scan 1's line names scan 3's file
-  replaceLine(poses, 5, "garbage");                                               // scan 3's line
+  replaceLine(poses, 5, "garbage");                                              // scan 3's line
   const MapDirectory map(dir);
   std::string all;
   for (const MapProblem& p : map.problems()) all += p.message() + "\n";
-  EXPECT_NE(all.find(journal + ": line 5: expected 17 comma-separated values, found 4; line ignored"), std::string::npos) << all;
-  EXPECT_NE(all.find(journal + ": line 7: scan 4 has no valid line in poses.csv; the journal line names scans/scan_0002.pcd, "
-                               "not scans/scan_0004.pcd; not restored"), std::string::npos) << all;
+  EXPECT_NE(all.find(journal + ": line 5: expected 17 comma-separated values, found 4; line ignored"),
+            std::string::npos)
+      << all;
+  EXPECT_NE(
+      all.find(journal + ": line 7: scan 4 has no valid line in poses.csv; the journal line names scans/scan_0002.pcd, "
+                         "not scans/scan_0004.pcd; not restored"),
+      std::string::npos)
+      << all;
   EXPECT_NE(all.find("scan 3 has no valid line in poses.csv; its file scans/scan_0003.pcd belongs to scan 1 in "
-                     "poses.csv; not restored"), std::string::npos) << all;
+                     "poses.csv; not restored"),
+            std::string::npos)
+      << all;
   EXPECT_TRUE(map.restored().empty());
   EXPECT_EQ(indices(map), (std::vector<uint32_t>{0, 1, 2}));
 }
@@ -554,7 +564,6 @@ TEST(MapDirectory, TruncatedScanFileIsReportedByName) {
     EXPECT_NE(std::string(e.what()).find(scan), std::string::npos) << e.what();
   }
 }
-
 
 // Issue #22 class 3: a pose 100 km away grew plan_step to 6 GB. Poses are bounds-checked when read
 // (the line is refused, by number) and when appended.
@@ -616,8 +625,8 @@ TEST(OpenMapForTool, ANaNPoseIsAnErrorNamingTheLine) {
   text.replace(at, std::string("\n1,scans/scan_0001.pcd,40,1,").size(), "\n1,scans/scan_0001.pcd,40,nan,");
   writeFileAtomic(dir + "/poses.csv", text);
   dropJournal(dir);  // poses.csv alone (the journal would restore the line)
-  expectIoError([&] { openMapForTool(dir, false, nullptr); }, dir + "/poses.csv: line 3: column 4 ('nan') is not a finite number",
-                "--skip-bad loads the rest");
+  expectIoError([&] { openMapForTool(dir, false, nullptr); },
+                dir + "/poses.csv: line 3: column 4 ('nan') is not a finite number", "--skip-bad loads the rest");
   size_t scans = 0;
   const std::vector<std::string> warnings = warningsOf(dir, true, &scans);
   EXPECT_EQ(scans, 2u);
@@ -640,7 +649,8 @@ TEST(OpenMapForTool, ALineTheJournalRestoresIsNamedAndLoadedWithSkipBad) {
   EXPECT_EQ(map.size(), 3u);
   ASSERT_EQ(warnings.size(), 2u);
   EXPECT_EQ(warnings[0].rfind("repaired: " + dir + "/poses.csv: line 4: ", 0), 0u) << warnings[0];
-  EXPECT_NE(warnings[1].find("scan 2 has no valid line in poses.csv; restored from poses_journal.csv"), std::string::npos)
+  EXPECT_NE(warnings[1].find("scan 2 has no valid line in poses.csv; restored from poses_journal.csv"),
+            std::string::npos)
       << warnings[1];
   // Without the ledger the line is skipped, not repaired (and scan 2's file is one no line names).
   dropJournal(dir);
@@ -648,13 +658,15 @@ TEST(OpenMapForTool, ALineTheJournalRestoresIsNamedAndLoadedWithSkipBad) {
   EXPECT_EQ(openMapForTool(dir, true, [&](const std::string& w) { warnings.push_back(w); }).size(), 2u);
   ASSERT_EQ(warnings.size(), 2u);
   EXPECT_EQ(warnings[0].rfind("skipped: " + dir + "/poses.csv: line 4: ", 0), 0u) << warnings[0];
-  EXPECT_EQ(warnings[1], "skipped: " + dir + "/scans/scan_0002.pcd: not listed in poses.csv (an interrupted append?); not loaded");
+  EXPECT_EQ(warnings[1],
+            "skipped: " + dir + "/scans/scan_0002.pcd: not listed in poses.csv (an interrupted append?); not loaded");
 }
 
 TEST(OpenMapForTool, CreatesNothingAndNamesAMissingOrForeignDirectory) {
   TempDir tmp;
   // `icp_replay --help` created --help/scans before: a tool never creates the map it reads.
-  expectIoError([&] { openMapForTool(tmp.file("--help"), false, nullptr); }, tmp.file("--help"), "no such map directory");
+  expectIoError([&] { openMapForTool(tmp.file("--help"), false, nullptr); }, tmp.file("--help"),
+                "no such map directory");
   struct stat st;
   EXPECT_NE(::stat(tmp.file("--help").c_str(), &st), 0);
   ASSERT_EQ(::mkdir(tmp.file("plain").c_str(), 0755), 0);

@@ -24,13 +24,16 @@ TEST(MasterWatchdog, LostOnceThenTimedOutNamingTheUriAndHowLong) {
   EXPECT_EQ(w.update(101.0, false), Event::Lost);
   EXPECT_EQ(w.state(), State::Lost);
   // Gone since the last check that reached it (100.5).
-  EXPECT_TRUE(contains(w.message(), "the ROS master at http://127.0.0.1:11471 is unreachable (gone for 0.5 s)")) << w.message();
+  EXPECT_TRUE(contains(w.message(), "the ROS master at http://127.0.0.1:11471 is unreachable (gone for 0.5 s)"))
+      << w.message();
   EXPECT_TRUE(contains(w.message(), "master_timeout_s = 10.0 s")) << w.message();
   for (double t = 101.5; t < 110.5; t += 0.5) EXPECT_EQ(w.update(t, false), Event::None) << t;  // said once
   EXPECT_DOUBLE_EQ(w.lostFor(110.0), 9.5);
   EXPECT_EQ(w.update(110.5, false), Event::TimedOut);
   EXPECT_EQ(w.state(), State::TimedOut);
-  EXPECT_TRUE(contains(w.message(), "the ROS master at http://127.0.0.1:11471 has been unreachable for 10.0 s (master_timeout_s = 10.0 s)"))
+  EXPECT_TRUE(
+      contains(w.message(),
+               "the ROS master at http://127.0.0.1:11471 has been unreachable for 10.0 s (master_timeout_s = 10.0 s)"))
       << w.message();
   // Final: nothing more, also when the master comes back.
   EXPECT_EQ(w.update(111.0, false), Event::None);
@@ -60,7 +63,8 @@ TEST(MasterWatchdog, ANewMasterOnTheUriIsARestartNotABack) {
   EXPECT_EQ(w.update(1.0, false), Event::Lost);
   EXPECT_EQ(w.update(3.0, true, 200), Event::Restarted);
   EXPECT_EQ(w.state(), State::Restarted);
-  EXPECT_TRUE(contains(w.message(), "answers again after 3.0 s, but it is a new master (pid 200, was 100)")) << w.message();
+  EXPECT_TRUE(contains(w.message(), "answers again after 3.0 s, but it is a new master (pid 200, was 100)"))
+      << w.message();
   EXPECT_EQ(w.update(4.0, true, 200), Event::None);
   // Restarted between two checks (never seen unreachable).
   MasterWatchdog quick(kUri, 30.0);

@@ -36,7 +36,8 @@ TEST(Options, IntegerOverflowAndGarbageAreRefusedWithNameValueAndRange) {
   // std::stoi answered "stoi" for this one.
   Parsed p = parse(opts, {"--max-iterations", "99999999999"});
   EXPECT_EQ(p.rc, 2);
-  EXPECT_NE(p.err.find("tool: --max-iterations 99999999999: not an integer in [1, 100000]"), std::string::npos) << p.err;
+  EXPECT_NE(p.err.find("tool: --max-iterations 99999999999: not an integer in [1, 100000]"), std::string::npos)
+      << p.err;
   EXPECT_NE(p.err.find("usage: tool"), std::string::npos) << p.err;
   for (const char* bad : {"12abc", "1.5", "", " 5", "0x10", "1e3", "0", "100001", "-5", "99999999999999999999999"}) {
     p = parse(opts, {"--max-iterations", bad});
@@ -60,7 +61,9 @@ TEST(Options, IntegerOverflowAndGarbageAreRefusedWithNameValueAndRange) {
 TEST(Options, RealsRefuseTrailingGarbageNaNInfAndOutOfRange) {
   double c_max = 0.5, voxel = 0.0, angle = 0.0;
   Options opts("tool", "usage");
-  opts.real("--c-max", c_max, 0.001, 5.0).real("--voxel", voxel, 0.0, 10.0).real("--r-c-deg", angle, 0.0, 90.0, M_PI / 180);
+  opts.real("--c-max", c_max, 0.001, 5.0)
+      .real("--voxel", voxel, 0.0, 10.0)
+      .real("--r-c-deg", angle, 0.0, 90.0, M_PI / 180);
   Parsed p = parse(opts, {"--c-max", "0.1abc"});  // ran silently with 0.1 before
   EXPECT_EQ(p.rc, 2);
   EXPECT_NE(p.err.find("--c-max 0.1abc: not a number in [0.001, 5]"), std::string::npos) << p.err;

@@ -71,7 +71,9 @@ TEST(Stl, BinaryHeaderStartingWithSolidIsStillBinary) {
   EXPECT_EQ(m.faces.size(), 2u);
 }
 
-TEST(Stl, MissingFile) { expectIoError([] { readStl("/nonexistent/world.stl"); }, "/nonexistent/world.stl", "no such file"); }
+TEST(Stl, MissingFile) {
+  expectIoError([] { readStl("/nonexistent/world.stl"); }, "/nonexistent/world.stl", "no such file");
+}
 
 TEST(Stl, EmptyFile) {
   TempDir dir;
@@ -122,7 +124,8 @@ TEST(Stl, AbsurdCoordinatesAreRefusedByTriangleAndVertex) {
   const std::string q = dir.write("far_ascii.stl",
                                   "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
                                   "vertex 0 -2e5 0\nendloop\nendfacet\nendsolid x\n");
-  expectIoError([&] { readStl(q); }, q, "triangle 0 vertex 3 (0, -200000, 0) lies beyond the 100000 m coordinate limit");
+  expectIoError([&] { readStl(q); }, q,
+                "triangle 0 vertex 3 (0, -200000, 0) lies beyond the 100000 m coordinate limit");
   mesh.vertices[3] = Eigen::Vector3f(0, 99999, 0);  // inside the limit: read
   writeStlBinary(dir.file("near.stl"), mesh);
   EXPECT_EQ(readStl(dir.file("near.stl")).faces.size(), 4u);

@@ -4,14 +4,14 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
-#include <string>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
-#include "scanstop_eval/surface_elements.h"
 #include "scanstop_eval/ground_truth.h"
+#include "scanstop_eval/surface_elements.h"
 
 namespace scanstop {
 namespace eval {
@@ -48,12 +48,15 @@ std::optional<Eigen::Vector2d> nearestCentre(const ReachableFloor& floor, double
 std::vector<Eigen::Vector2d> latticeOnCentres(const ReachableFloor& floor, const Pose2D& start, double grid_m) {
   const explorer::GridGeometry& g = floor.geometry;
   const double x0 = g.origin_x, y0 = g.origin_y, x1 = x0 + g.width * g.resolution, y1 = y0 + g.height * g.resolution;
-  const long i0 = -static_cast<long>(std::floor((start.x - x0) / grid_m)), i1 = static_cast<long>((x1 - start.x) / grid_m);
-  const long j0 = -static_cast<long>(std::floor((start.y - y0) / grid_m)), j1 = static_cast<long>((y1 - start.y) / grid_m);
+  const long i0 = -static_cast<long>(std::floor((start.x - x0) / grid_m)),
+             i1 = static_cast<long>((x1 - start.x) / grid_m);
+  const long j0 = -static_cast<long>(std::floor((start.y - y0) / grid_m)),
+             j1 = static_cast<long>((y1 - start.y) / grid_m);
   std::vector<Eigen::Vector2d> out;
   for (long j = j0; j <= j1; ++j)
     for (long i = i0; i <= i1; ++i)
-      if (const auto p = nearestCentre(floor, start.x + i * grid_m, start.y + j * grid_m, grid_m / 2)) out.push_back(*p);
+      if (const auto p = nearestCentre(floor, start.x + i * grid_m, start.y + j * grid_m, grid_m / 2))
+        out.push_back(*p);
   return out;
 }
 
@@ -179,8 +182,8 @@ CoverResult coverOf(const std::vector<ElementSet>& sets, size_t universe, size_t
   out.total = total;
   out.greedy = greedyCover(sets, universe);
   out.targets = scansNeeded(out.greedy, total, config.shares, std::nullopt);
-  const bool pairs_may_help =
-      std::any_of(out.targets.begin(), out.targets.end(), [](const CoverTarget& t) { return t.scans && *t.scans >= 3; });
+  const bool pairs_may_help = std::any_of(out.targets.begin(), out.targets.end(),
+                                          [](const CoverTarget& t) { return t.scans && *t.scans >= 3; });
   if (pairs_may_help && config.max_pair_work > 0) {
     out.best_pair = bestPairCoverage(sets, universe, config.max_pair_work);
     out.targets = scansNeeded(out.greedy, total, config.shares, out.best_pair);
@@ -192,8 +195,7 @@ CoverResult coverOf(const std::vector<ElementSet>& sets, size_t universe, size_t
 /// candidate lattice.
 struct Scene {
   Scene(const TriangleMesh& mesh, const Pose2D& start, const OracleConfig& config)
-      : truth(reachableFloor(mesh, start, config.robot_radius_m, config.raster_m, config.z_lo_m,
-                                       config.z_hi_m)),
+      : truth(reachableFloor(mesh, start, config.robot_radius_m, config.raster_m, config.z_lo_m, config.z_hi_m)),
         floor(truth, config.cellsPerFloorCell()),
         surface(mesh, config.surface_cell_m, config.z_lo_m),
         lattice(latticeOnCentres(truth, start, config.grid_m)) {}
@@ -212,8 +214,8 @@ void OracleConfig::validate() const {
   requireInRange("raster_m", raster_m, 0.01, 1.0, "m");
   requireInRange("cell_m", cell_m, raster_m, 1.0, "m");
   if (std::abs(cellsPerFloorCell() * raster_m - cell_m) > 1e-6 * cell_m)
-    throw ConfigError("cell_m = " + std::to_string(cell_m) + " m is not a whole multiple of raster_m = " +
-                      std::to_string(raster_m) + " m");
+    throw ConfigError("cell_m = " + std::to_string(cell_m) +
+                      " m is not a whole multiple of raster_m = " + std::to_string(raster_m) + " m");
   requireInRange("floor_tolerance_m", floor_tolerance_m, 0.0, 1.0, "m");
   requireInRange("known_free_m", known_free_m, 0.0, 5.0, "m");
   requireInRange("surface_cell_m", surface_cell_m, 0.01, 1.0, "m");

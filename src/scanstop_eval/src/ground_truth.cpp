@@ -39,12 +39,13 @@ ReachableFloor reachableFloor(const TriangleMesh& world, const Pose2D& start_wor
   // Sizes in double before any cast (a vertex at 1e30 m overflowed int), capped at kMaxGridCells:
   // about 13 bytes per cell in the masks below, so at most ~260 MB (issue #22 class 3).
   constexpr double kMaxGridCells = 2e7;
-  const double w = std::ceil((hi.x() - g.origin_x) / resolution) + 2, h = std::ceil((hi.y() - g.origin_y) / resolution) + 2;
+  const double w = std::ceil((hi.x() - g.origin_x) / resolution) + 2,
+               h = std::ceil((hi.y() - g.origin_y) / resolution) + 2;
   if (!(w > 0 && h > 0 && w * h <= kMaxGridCells)) {
     std::ostringstream what;
-    what << "the true reachable floor: the world's extent x [" << lo.x() << ", " << hi.x() << "] y [" << lo.y() << ", " << hi.y()
-         << "] m needs a grid of " << w << " x " << h << " cells at " << resolution << " m, more than the limit of "
-         << kMaxGridCells << " cells";
+    what << "the true reachable floor: the world's extent x [" << lo.x() << ", " << hi.x() << "] y [" << lo.y() << ", "
+         << hi.y() << "] m needs a grid of " << w << " x " << h << " cells at " << resolution
+         << " m, more than the limit of " << kMaxGridCells << " cells";
     throw std::invalid_argument(what.str());
   }
   g.width = static_cast<int>(w);
@@ -76,14 +77,17 @@ ReachableFloor reachableFloor(const TriangleMesh& world, const Pose2D& start_wor
   const cv::Point s = g.cellOf(start_world.x, start_world.y);
   if (!g.contains(s) || out.blocked.at<uint8_t>(s))
     throw std::invalid_argument("the true reachable floor: the start (" + std::to_string(start_world.x) + ", " +
-                                std::to_string(start_world.y) + ") is outside the world, off its floor or inside an obstacle");
+                                std::to_string(start_world.y) +
+                                ") is outside the world, off its floor or inside an obstacle");
   // Free cells whose distance to an obstacle is at least the radius, component of the start.
   cv::Mat dist;
   cv::distanceTransform(1 - out.blocked, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE);
   cv::Mat centres = dist >= static_cast<float>(robot_radius_m / resolution);
-  if (!centres.at<uint8_t>(s)) throw std::invalid_argument("the true reachable floor: the robot disc does not fit at the start");
+  if (!centres.at<uint8_t>(s))
+    throw std::invalid_argument("the true reachable floor: the robot disc does not fit at the start");
   cv::Mat mask = cv::Mat::zeros(g.height + 2, g.width + 2, CV_8U);
-  cv::floodFill(centres, mask, s, cv::Scalar(255), nullptr, cv::Scalar(), cv::Scalar(), 4 | cv::FLOODFILL_MASK_ONLY | (1 << 8));
+  cv::floodFill(centres, mask, s, cv::Scalar(255), nullptr, cv::Scalar(), cv::Scalar(),
+                4 | cv::FLOODFILL_MASK_ONLY | (1 << 8));
   out.centres = mask(cv::Rect(1, 1, g.width, g.height)).clone();
   // Swept floor: the component grown by the robot radius, obstacles excluded.
   const int r = static_cast<int>(std::ceil(robot_radius_m / resolution));
@@ -100,7 +104,8 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
                                         double resolution, double z_lo, double z_hi, double tolerance_m) {
   if (world.faces.empty()) throw std::invalid_argument("groundTruthCoverage: the world mesh has no triangles");
   if (!(resolution > 0.0) || !(robot_radius_m > 0.0) || !(z_hi > z_lo) || !(tolerance_m >= 0.0))
-    throw std::invalid_argument("groundTruthCoverage: resolution, robot radius and tolerance must be positive, z_hi > z_lo");
+    throw std::invalid_argument(
+        "groundTruthCoverage: resolution, robot radius and tolerance must be positive, z_hi > z_lo");
   if (states.type() != CV_8U || states.cols != mg.width || states.rows != mg.height)
     throw std::invalid_argument("groundTruthCoverage: states must be CV_8U of the map geometry's size");
   ReachableFloor truth = reachableFloor(world, start_world, robot_radius_m, resolution, z_lo, z_hi);
@@ -121,7 +126,8 @@ GroundTruthCoverage groundTruthCoverage(const TriangleMesh& world, const Pose2D&
       if (g.contains(c)) map_floor.at<uint8_t>(c) = 1;
     }
   const int t = static_cast<int>(std::ceil(tolerance_m / resolution));
-  if (t > 0) cv::dilate(map_floor, map_floor, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * t + 1, 2 * t + 1)));
+  if (t > 0)
+    cv::dilate(map_floor, map_floor, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * t + 1, 2 * t + 1)));
   out.observed = out.reachable & map_floor;
   const int n_reach = cv::countNonZero(out.reachable), n_obs = cv::countNonZero(out.observed);
   out.reachable_m2 = n_reach * g.cellArea();
@@ -151,8 +157,8 @@ GroundTruthCoverage groundTruthCoverageOfRun(const TriangleMesh& world, const Po
   if (!explorer_config_file.empty() && ::stat(explorer_config_file.c_str(), &st) == 0)
     explorer::readParameterFile(explorer_config_file, config);
   else if (note)
-    *note = "no explorer configuration " + (explorer_config_file.empty() ? std::string("given") : explorer_config_file) +
-            ": the explorer's defaults";
+    *note = "no explorer configuration " +
+            (explorer_config_file.empty() ? std::string("given") : explorer_config_file) + ": the explorer's defaults";
   return groundTruthCoverageOfMap(world, start_world, map, robot_radius_m.value_or(config.planner.robot_radius_m), 0.1,
                                   nullptr, config);
 }

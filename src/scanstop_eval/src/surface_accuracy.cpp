@@ -42,13 +42,15 @@ std::string lowerExtension(const std::string& path) {
   const size_t dot = path.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
   std::string ext = path.substr(dot);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
 /// Calls f(point, weight) for the k^2 centroids of triangle (a, b, c)'s congruent sub-triangles.
 template <class F>
-void sampleTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c, double spacing_m, F&& f) {
+void sampleTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c, double spacing_m,
+                    F&& f) {
   const Eigen::Vector3f ab = b - a, ac = c - a;
   const double area = 0.5 * static_cast<double>(ab.cross(ac).norm());
   if (!(area > 0.0) || !std::isfinite(area)) return;
@@ -58,7 +60,7 @@ void sampleTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Ei
   const float inv = 1.0f / static_cast<float>(k);
   for (int i = 0; i < k; ++i)
     for (int j = 0; i + j < k; ++j) {
-      f(a + ((i + 1.0f / 3) * inv) * ab + ((j + 1.0f / 3) * inv) * ac, w);  // upward sub-triangle
+      f(a + ((i + 1.0f / 3) * inv) * ab + ((j + 1.0f / 3) * inv) * ac, w);                      // upward sub-triangle
       if (i + j + 2 <= k) f(a + ((i + 2.0f / 3) * inv) * ab + ((j + 2.0f / 3) * inv) * ac, w);  // downward
     }
 }
@@ -70,7 +72,8 @@ float pointTriangleDistance2(const Eigen::Vector3f& pf, const Eigen::Vector3f& a
   const Vec3d p = pf.cast<double>(), a = af.cast<double>(), b = bf.cast<double>(), c = cf.cast<double>();
   const Vec3d ab = b - a, ac = c - a;
   if (ab.cross(ac).squaredNorm() <= 1e-24 * std::max(1.0, ab.squaredNorm() * ac.squaredNorm()))
-    return static_cast<float>(std::min({segmentDistance2(p, a, b), segmentDistance2(p, a, c), segmentDistance2(p, b, c)}));
+    return static_cast<float>(
+        std::min({segmentDistance2(p, a, b), segmentDistance2(p, a, c), segmentDistance2(p, b, c)}));
   // The region of the triangle's plane that p projects into: a corner, an edge or the inside.
   const Vec3d ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
@@ -109,9 +112,7 @@ WorldSurfaceDistance::WorldSurfaceDistance(const TriangleMesh& world, double cel
   if (a_.empty()) throw std::invalid_argument("world mesh: no finite triangles");
   double cell = cell_m > 0 ? cell_m : 0.1;
   const Eigen::Vector3d extent = (hi - lo).cast<double>();
-  const auto count = [&](double s) {
-    return (extent.x() / s + 3) * (extent.y() / s + 3) * (extent.z() / s + 3);
-  };
+  const auto count = [&](double s) { return (extent.x() / s + 3) * (extent.y() / s + 3) * (extent.z() / s + 3); };
   while (count(cell) > max_cells) cell *= 1.25;
   cell_ = static_cast<float>(cell);
   origin_ = lo - Eigen::Vector3f::Constant(cell_);
@@ -256,9 +257,12 @@ DistanceStats distanceStats(const std::vector<float>& distances, const std::vect
 
 const char* kindName(AccuracyInput::Kind kind) {
   switch (kind) {
-    case AccuracyInput::Kind::Mesh: return "mesh";
-    case AccuracyInput::Kind::Cloud: return "cloud";
-    case AccuracyInput::Kind::MapDirectory: return "map";
+    case AccuracyInput::Kind::Mesh:
+      return "mesh";
+    case AccuracyInput::Kind::Cloud:
+      return "cloud";
+    case AccuracyInput::Kind::MapDirectory:
+      return "map";
   }
   return "?";
 }

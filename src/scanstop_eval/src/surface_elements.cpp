@@ -48,14 +48,17 @@ SurfaceElements::SurfaceElements(const TriangleMesh& mesh, double cell_m, double
     const float longest = std::max({ab.norm(), ac.norm(), (ac - ab).norm()});
     const int n = std::max(1, static_cast<int>(std::ceil(longest / step)));
     for (int i = 0; i <= n; ++i)
-      for (int j = 0; i + j <= n; ++j) addSample(a + (static_cast<float>(i) / n) * ab + (static_cast<float>(j) / n) * ac);
+      for (int j = 0; i + j <= n; ++j)
+        addSample(a + (static_cast<float>(i) / n) * ab + (static_cast<float>(j) / n) * ac);
   }
 }
 
 void SurfaceElements::addSample(const Eigen::Vector3f& p) {
   int c[3];
-  for (int a = 0; a < 3; ++a) c[a] = std::clamp(static_cast<int>(std::floor((p[a] - origin_[a]) / cell_)), 0, dims_[a] - 1);
-  const Eigen::Vector3f centre = origin_ + (Eigen::Vector3f(c[0], c[1], c[2]) + Eigen::Vector3f::Constant(0.5f)) * cell_;
+  for (int a = 0; a < 3; ++a)
+    c[a] = std::clamp(static_cast<int>(std::floor((p[a] - origin_[a]) / cell_)), 0, dims_[a] - 1);
+  const Eigen::Vector3f centre =
+      origin_ + (Eigen::Vector3f(c[0], c[1], c[2]) + Eigen::Vector3f::Constant(0.5f)) * cell_;
   const float d2 = (p - centre).squaredNorm();
   int32_t& id = grid_[index(c[0], c[1], c[2])];
   if (id < 0) {

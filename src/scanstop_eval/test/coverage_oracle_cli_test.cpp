@@ -88,7 +88,9 @@ TEST(CoverageOracleCli, JsonIsValidJsonAndTheTextNamesTheCounts) {
   EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"floor\": {\"total\": "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"scans\": {\"90\": 1, \"95\": 1, \"99\": 1}"), std::string::npos) << r.out;
-  r = run(base + " --json | python3 -c 'import json, sys; d = json.load(sys.stdin); print(\"parsed\", d[\"floor\"][\"scans\"][\"99\"])'");
+  r = run(base +
+          " --json | python3 -c 'import json, sys; d = json.load(sys.stdin); print(\"parsed\", "
+          "d[\"floor\"][\"scans\"][\"99\"])'");
   EXPECT_EQ(r.status, 0) << r.out;
   EXPECT_NE(r.out.find("parsed 1"), std::string::npos) << r.out;
   r = run(base);

@@ -39,12 +39,12 @@ TriangleMesh lRoom() {
   sim::WorldBuilder b(2.5);
   b.floorAndCeiling(-2 * kT, -2 * kT, 8 + 2 * kT, 2 + 2 * kT);
   b.floorAndCeiling(-2 * kT, 2 + 2 * kT, 2 + 2 * kT, 8 + 2 * kT);
-  b.wallX(-kT, -2 * kT, 8 + 2 * kT);          // south
-  b.wallY(8 + kT, -2 * kT, 2 + 2 * kT);       // east end of the x arm
-  b.wallX(2 + kT, 2, 8 + 2 * kT);             // north side of the x arm
-  b.wallY(2 + kT, 2, 8 + 2 * kT);             // east side of the y arm
-  b.wallX(8 + kT, -2 * kT, 2 + 2 * kT);       // north end of the y arm
-  b.wallY(-kT, -2 * kT, 8 + 2 * kT);          // west
+  b.wallX(-kT, -2 * kT, 8 + 2 * kT);     // south
+  b.wallY(8 + kT, -2 * kT, 2 + 2 * kT);  // east end of the x arm
+  b.wallX(2 + kT, 2, 8 + 2 * kT);        // north side of the x arm
+  b.wallY(2 + kT, 2, 8 + 2 * kT);        // east side of the y arm
+  b.wallX(8 + kT, -2 * kT, 2 + 2 * kT);  // north end of the y arm
+  b.wallY(-kT, -2 * kT, 8 + 2 * kT);     // west
   return b.mesh();
 }
 

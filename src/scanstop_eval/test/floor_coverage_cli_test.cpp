@@ -115,6 +115,7 @@ TEST(FloorCoverageCli, MeasuresAMapAndRefusesBadInputByName) {
       << r.out;
   r = run(exe + dir + "/world.stl " + map + " --start 2,2,0 --skip-bad");
   EXPECT_EQ(r.status, 0) << r.out;
-  EXPECT_NE(r.out.find("floor_coverage: warning: skipped: " + map + "/scans/scan_0001.pcd"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("floor_coverage: warning: skipped: " + map + "/scans/scan_0001.pcd"), std::string::npos)
+      << r.out;
   EXPECT_NE(r.out.find("\"scans\": 1"), std::string::npos) << r.out;
 }

@@ -78,11 +78,11 @@ TEST(GroundTruthCoverage, TheRobotDiscStaysOnTheFloor) {
   const auto world = [](float band) {
     scanstop::TriangleMesh w;
     addBox(w, {-0.1f - band, -0.1f - band, -0.1f}, {4.1f + band, 4.1f + band, 0.0f});
-    addBox(w, {-0.1f, -0.1f, 0.0f}, {0.0f, 4.1f, 2.5f});   // west
-    addBox(w, {-0.1f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});   // south
-    addBox(w, {-0.1f, 4.0f, 0.0f}, {4.1f, 4.1f, 2.5f});    // north
-    addBox(w, {4.0f, -0.1f, 0.0f}, {4.1f, 1.5f, 2.5f});    // east, south of the opening
-    addBox(w, {4.0f, 2.5f, 0.0f}, {4.1f, 4.1f, 2.5f});     // east, north of it
+    addBox(w, {-0.1f, -0.1f, 0.0f}, {0.0f, 4.1f, 2.5f});  // west
+    addBox(w, {-0.1f, -0.1f, 0.0f}, {4.1f, 0.0f, 2.5f});  // south
+    addBox(w, {-0.1f, 4.0f, 0.0f}, {4.1f, 4.1f, 2.5f});   // north
+    addBox(w, {4.0f, -0.1f, 0.0f}, {4.1f, 1.5f, 2.5f});   // east, south of the opening
+    addBox(w, {4.0f, 2.5f, 0.0f}, {4.1f, 4.1f, 2.5f});    // east, north of it
     return w;
   };
   const Pose2D start(2.0, 2.0, 0.0);
@@ -95,7 +95,7 @@ TEST(GroundTruthCoverage, TheRobotDiscStaysOnTheFloor) {
   const cv::Mat nothing_seen = cv::Mat::zeros(mg.height, mg.width, CV_8U);
   const GroundTruthCoverage narrow = groundTruthCoverage(world(0.5f), start, nothing_seen, mg, start, 0.3);
   const GroundTruthCoverage wide = groundTruthCoverage(world(1.2f), start, nothing_seen, mg, start, 0.3);
-  EXPECT_GT(narrow.reachable_m2, 15.0);   // the room (16 m2 less the corners a disc cannot sweep)
+  EXPECT_GT(narrow.reachable_m2, 15.0);  // the room (16 m2 less the corners a disc cannot sweep)
   // and what the disc sweeps standing in the opening (under 0.5 m2), not the 9.4 m2 band outside.
   EXPECT_LE(narrow.reachable_m2, 17.0);
   EXPECT_GT(wide.reachable_m2, 16.0 + 20.0);  // the ring: (4.2 + 2.4)^2 - 4.2^2 = 25.9 m2 less its corners

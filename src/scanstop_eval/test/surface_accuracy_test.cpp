@@ -3,17 +3,17 @@
 // exactly on the surfaces, offset 2 cm, half of it.
 #include <gtest/gtest.h>
 
+#include <stdlib.h>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <random>
-#include <stdlib.h>
 #include <vector>
 
+#include "room_with_box.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_eval/surface_accuracy.h"
-#include "room_with_box.h"
 #include "scanstop_sim/world_builder.h"
 
 using namespace scanstop;
@@ -96,12 +96,12 @@ struct Fixture {
 TEST(SurfaceAccuracy, PointTriangleDistanceInEveryRegion) {
   const Eigen::Vector3f a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
   EXPECT_NEAR(pointTriangleDistance2({0.2f, 0.2f, 0.5f}, a, b, c), 0.25f, 1e-6);  // above the inside
-  EXPECT_NEAR(pointTriangleDistance2({-1, -1, 0}, a, b, c), 2.0f, 1e-6);         // corner a
-  EXPECT_NEAR(pointTriangleDistance2({2, 0, 0}, a, b, c), 1.0f, 1e-6);           // corner b
-  EXPECT_NEAR(pointTriangleDistance2({0, 3, 0}, a, b, c), 4.0f, 1e-6);           // corner c
-  EXPECT_NEAR(pointTriangleDistance2({0.5f, -2, 0}, a, b, c), 4.0f, 1e-6);       // edge ab
-  EXPECT_NEAR(pointTriangleDistance2({-3, 0.5f, 0}, a, b, c), 9.0f, 1e-6);       // edge ac
-  EXPECT_NEAR(pointTriangleDistance2({1, 1, 0}, a, b, c), 0.5f, 1e-6);           // edge bc
+  EXPECT_NEAR(pointTriangleDistance2({-1, -1, 0}, a, b, c), 2.0f, 1e-6);          // corner a
+  EXPECT_NEAR(pointTriangleDistance2({2, 0, 0}, a, b, c), 1.0f, 1e-6);            // corner b
+  EXPECT_NEAR(pointTriangleDistance2({0, 3, 0}, a, b, c), 4.0f, 1e-6);            // corner c
+  EXPECT_NEAR(pointTriangleDistance2({0.5f, -2, 0}, a, b, c), 4.0f, 1e-6);        // edge ab
+  EXPECT_NEAR(pointTriangleDistance2({-3, 0.5f, 0}, a, b, c), 9.0f, 1e-6);        // edge ac
+  EXPECT_NEAR(pointTriangleDistance2({1, 1, 0}, a, b, c), 0.5f, 1e-6);            // edge bc
   // Degenerate (a segment): the distance to the segment.
   EXPECT_NEAR(pointTriangleDistance2({0.5f, 1, 0}, a, b, {0.5f, 0, 0}), 1.0f, 1e-6);
 }
@@ -125,7 +125,8 @@ TEST(SurfaceAccuracy, TheGridSearchEqualsBruteForceNearAndFar) {
 
 TEST(SurfaceAccuracy, WeightedStatistics) {
   // Weights: 0.01 m stands for 3 of 4 units, so the median and the shares follow the weights.
-  const DistanceStats s = distanceStats(std::vector<std::pair<float, float>>{{0.01f, 3.0f}, {0.05f, 1.0f}, {NAN, 5.0f}});
+  const DistanceStats s =
+      distanceStats(std::vector<std::pair<float, float>>{{0.01f, 3.0f}, {0.05f, 1.0f}, {NAN, 5.0f}});
   EXPECT_EQ(s.count, 2u);
   EXPECT_FLOAT_EQ(s.median_m, 0.01f);
   EXPECT_FLOAT_EQ(s.p95_m, 0.05f);
@@ -151,7 +152,8 @@ TEST(SurfaceAccuracy, SamplesAreAreaWeighted) {
 
 TEST(SurfaceAccuracy, TheWorldsOwnMeshIsExactAndCoversAllThatIsVisible) {
   Fixture f;
-  const SurfaceAccuracy r = measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(subdivide(f.world_mesh, 0.2)), f.start, Fixture::config2cm());
+  const SurfaceAccuracy r = measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(subdivide(f.world_mesh, 0.2)),
+                                                   f.start, Fixture::config2cm());
   EXPECT_GT(r.triangles, 1000u);
   EXPECT_LT(r.surface_distance.max_m, 1e-4);  // float rounding of the map frame round trip
   EXPECT_LT(r.vertex_distance.max_m, 1e-4);
@@ -160,7 +162,8 @@ TEST(SurfaceAccuracy, TheWorldsOwnMeshIsExactAndCoversAllThatIsVisible) {
   EXPECT_EQ(r.covered, r.visible);
   EXPECT_DOUBLE_EQ(r.coverage, 1.0);
   // The same mesh taken as if the map frame were the world's: off by the start pose.
-  const SurfaceAccuracy wrong = measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(f.world_mesh), Pose2D(), Fixture::config2cm());
+  const SurfaceAccuracy wrong =
+      measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(f.world_mesh), Pose2D(), Fixture::config2cm());
   EXPECT_GT(wrong.surface_distance.median_m, 0.1);
   EXPECT_LT(wrong.coverage, 0.5);
 }
@@ -174,7 +177,8 @@ TEST(SurfaceAccuracy, AMeshOffsetTwoCentimetresHasAMedianOfTwoCentimetres) {
     const Eigen::Vector3f n = off.faceNormal(static_cast<size_t>(&t - off.faces.data()));
     for (int k = 0; k < 3; ++k) off.vertices[t[k]] += 0.02f * n;  // a soup: each vertex belongs to one face
   }
-  const SurfaceAccuracy r = measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(off), f.start, Fixture::config2cm());
+  const SurfaceAccuracy r =
+      measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(off), f.start, Fixture::config2cm());
   EXPECT_NEAR(r.surface_distance.median_m, 0.02, 5e-4);
   EXPECT_NEAR(r.surface_distance.p95_m, 0.02, 5e-4);
   EXPECT_LE(r.surface_distance.max_m, 0.0201);
@@ -182,7 +186,8 @@ TEST(SurfaceAccuracy, AMeshOffsetTwoCentimetresHasAMedianOfTwoCentimetres) {
   EXPECT_GT(r.coverage, 0.95);                  // 2 cm is within the 3 cm tolerance
 
   // A pure translation by 2 cm in z: nothing can be farther than 2 cm, floor and ceiling are exactly 2 cm off.
-  const TriangleMesh up = transformed(subdivide(f.world_mesh, 0.2), Eigen::Isometry3f(Eigen::Translation3f(0, 0, 0.02f)));
+  const TriangleMesh up =
+      transformed(subdivide(f.world_mesh, 0.2), Eigen::Isometry3f(Eigen::Translation3f(0, 0, 0.02f)));
   const SurfaceAccuracy u = measureSurfaceAccuracy(f.world, nullptr, f.meshInput(up), f.start, Fixture::config2cm());
   EXPECT_LE(u.surface_distance.max_m, 0.0201);
   EXPECT_NEAR(u.surface_distance.max_m, 0.02, 1e-4);
@@ -200,7 +205,8 @@ TEST(SurfaceAccuracy, HalfAMeshCoversAboutHalf) {
   for (size_t i = 0; i < f.visible.elements.size(); ++i)
     if (f.visible.visible[i] && f.visible.elements.point(i).x() < 2.0f) ++expected;
   const double expected_share = static_cast<double>(expected) / f.visible.visible_count;
-  const SurfaceAccuracy r = measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(half), f.start, Fixture::config2cm());
+  const SurfaceAccuracy r =
+      measureSurfaceAccuracy(f.world, &f.visible, f.meshInput(half), f.start, Fixture::config2cm());
   EXPECT_GT(r.coverage, 0.3);
   EXPECT_LT(r.coverage, 0.7);
   EXPECT_NEAR(r.coverage, expected_share, 0.03) << r.covered << " of " << r.visible;

@@ -5,11 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "room_with_box.h"
 #include "scanstop_common/cli_test.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_eval/surface_coverage.h"
-#include "room_with_box.h"
 #include "scanstop_sim/world_builder.h"
 
 using namespace scanstop;

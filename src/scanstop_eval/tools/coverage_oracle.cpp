@@ -2,9 +2,9 @@
 // A known-map reference for exploration (issue #19): candidate poses every M metres on the truly
 // reachable floor, one simulated perfect scan at each, and a greedy set cover (pairs checked
 // exactly): how many scans see 90 / 95 / 99 % of the reachable floor and of the visible surface.
-#include <cstdio>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -77,22 +77,26 @@ void printJson(const std::string& world, const OracleResult& r, const scanstop::
   std::cout << "{\"world\": " << scanstop::jsonString(world) << ", \"start\": [" << jsonNumber(r.start.x) << ", "
             << jsonNumber(r.start.y) << ", " << jsonNumber(r.start.yaw) << "], \"grid_m\": " << jsonNumber(c.grid_m)
             << ", \"planes\": " << c.planes << ", \"radius_m\": " << jsonNumber(c.robot_radius_m)
-            << ", \"cell_m\": " << jsonNumber(c.cell_m) << ", \"raster_m\": " << jsonNumber(c.raster_m) << ", \"known_free_m\": " << jsonNumber(c.known_free_m)
-            << ", \"candidates\": " << r.candidates.size() << ", \"candidates_refused\": " << r.candidates_refused
+            << ", \"cell_m\": " << jsonNumber(c.cell_m) << ", \"raster_m\": " << jsonNumber(c.raster_m)
+            << ", \"known_free_m\": " << jsonNumber(c.known_free_m) << ", \"candidates\": " << r.candidates.size()
+            << ", \"candidates_refused\": " << r.candidates_refused
             << ", \"reachable_m2\": " << jsonNumber(r.reachable_m2, 6) << ", \"floor_cells\": " << r.floor_cells
-            << ", \"floor_seen_share\": " << jsonNumber(floor_share, 6) << ", \"surface_elements\": " << r.surface_elements
-            << ", \"surface_visible\": " << r.surface_visible << ", \"surface_completeness\": " << jsonNumber(completeness, 6)
-            << ",\n \"floor\": " << coverJson(r.floor, r.candidates) << ",\n \"surface\": " << coverJson(r.surface, r.candidates)
+            << ", \"floor_seen_share\": " << jsonNumber(floor_share, 6)
+            << ", \"surface_elements\": " << r.surface_elements << ", \"surface_visible\": " << r.surface_visible
+            << ", \"surface_completeness\": " << jsonNumber(completeness, 6)
+            << ",\n \"floor\": " << coverJson(r.floor, r.candidates)
+            << ",\n \"surface\": " << coverJson(r.surface, r.candidates)
             << ",\n \"time_s\": {\"setup\": " << jsonNumber(r.setup_s, 4) << ", \"scans\": " << jsonNumber(r.scan_s, 4)
             << ", \"cover\": " << jsonNumber(r.cover_s, 4) << "}}\n";
 }
 
 void printText(const std::string& world, const OracleResult& r, const scanstop::eval::OracleConfig& c) {
-  std::printf("coverage_oracle: %s from (%g, %g, %g): %zu candidates every %g m (%zu refused by the simulator), %d planes\n",
-              world.c_str(), r.start.x, r.start.y, r.start.yaw, r.candidates.size(), c.grid_m, r.candidates_refused,
-              c.planes);
+  std::printf(
+      "coverage_oracle: %s from (%g, %g, %g): %zu candidates every %g m (%zu refused by the simulator), %d planes\n",
+      world.c_str(), r.start.x, r.start.y, r.start.yaw, r.candidates.size(), c.grid_m, r.candidates_refused, c.planes);
   std::printf("reachable floor: %.1f m2 (raster %g m) in %zu cells of %g m, seen by some candidate: %.1f %%\n",
-              r.reachable_m2, c.raster_m, r.floor_cells, c.cell_m, r.floor_cells ? 100.0 * r.floor_seen / r.floor_cells : 0.0);
+              r.reachable_m2, c.raster_m, r.floor_cells, c.cell_m,
+              r.floor_cells ? 100.0 * r.floor_seen / r.floor_cells : 0.0);
   std::printf("surface: %zu elements of %g m, visible from the reachable floor: %zu (surface completeness %.1f %%)\n",
               r.surface_elements, c.surface_cell_m, r.surface_visible,
               r.surface_elements ? 100.0 * r.surface_visible / r.surface_elements : 0.0);
@@ -108,8 +112,8 @@ void printText(const std::string& world, const OracleResult& r, const scanstop::
     std::printf("  %3zu: %6.2f %% | %6.2f %%\n", k, 100 * r.floor.shareAfter(k), 100 * r.surface.shareAfter(k));
   std::printf("floor cover poses (x, y) [m]:");
   for (const size_t i : r.floor.greedy.order) std::printf(" (%.2f, %.2f)", r.candidates[i].x(), r.candidates[i].y());
-  std::printf("\ntime: %.1f s (setup %.1f s, scans %.1f s, cover %.1f s)\n", r.setup_s + r.scan_s + r.cover_s, r.setup_s,
-              r.scan_s, r.cover_s);
+  std::printf("\ntime: %.1f s (setup %.1f s, scans %.1f s, cover %.1f s)\n", r.setup_s + r.scan_s + r.cover_s,
+              r.setup_s, r.scan_s, r.cover_s);
 }
 
 /// What is wrong with options that depend on each other ("" when nothing).

@@ -19,7 +19,8 @@
 
 namespace {
 constexpr const char* kUsage =
-    "usage: floor_coverage WORLD.stl MAP_DIR --start x,y,yaw [--radius R] [--tolerance T] [--config FILE] [--skip-bad]\n"
+    "usage: floor_coverage WORLD.stl MAP_DIR --start x,y,yaw [--radius R] [--tolerance T] [--config FILE] "
+    "[--skip-bad]\n"
     "  WORLD.stl  the simulated world (sim_node's ~world)\n"
     "  MAP_DIR    map directory written by icp_slam_node (poses.csv + scans/)\n"
     "  --start    the robot's start pose in the world [m, m, rad] (= the map frame), |x|, |y| <= 10000\n"
@@ -59,9 +60,8 @@ int main(int argc, char** argv) {
     explorer::ExplorerConfig config;
     if (!config_file.empty()) explorer::readParameterFile(config_file, config);
     const TriangleMesh world = readStl(world_path);
-    const MapDirectory dir = openMapForTool(map_path, skip_bad, [](const std::string& w) {
-      std::cerr << "floor_coverage: warning: " << w << "\n";
-    });
+    const MapDirectory dir = openMapForTool(
+        map_path, skip_bad, [](const std::string& w) { std::cerr << "floor_coverage: warning: " << w << "\n"; });
     std::vector<std::string> problems;
     const eval::GroundTruthCoverage c =
         eval::groundTruthCoverageOfMap(world, *start, dir, radius, tolerance, &problems, config);

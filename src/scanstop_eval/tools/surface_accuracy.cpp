@@ -43,9 +43,9 @@ using scanstop::eval::DistanceStats;
 
 std::string statsJson(const DistanceStats& s) {
   std::ostringstream o;
-  o << "{\"count\": " << s.count << ", \"median_m\": " << jsonNumber(s.median_m, 6) << ", \"mean_m\": "
-    << jsonNumber(s.mean_m, 6) << ", \"rms_m\": " << jsonNumber(s.rms_m, 6) << ", \"p95_m\": " << jsonNumber(s.p95_m, 6)
-    << ", \"max_m\": " << jsonNumber(s.max_m, 6) << ", \"within\": {";
+  o << "{\"count\": " << s.count << ", \"median_m\": " << jsonNumber(s.median_m, 6)
+    << ", \"mean_m\": " << jsonNumber(s.mean_m, 6) << ", \"rms_m\": " << jsonNumber(s.rms_m, 6)
+    << ", \"p95_m\": " << jsonNumber(s.p95_m, 6) << ", \"max_m\": " << jsonNumber(s.max_m, 6) << ", \"within\": {";
   for (size_t k = 0; k < s.within_m.size(); ++k)
     o << (k ? ", " : "") << "\"" << s.within_m[k] << "\": " << jsonNumber(s.share[k], 6);
   o << "}}";
@@ -112,7 +112,8 @@ int main(int argc, char** argv) {
     std::unique_ptr<eval::VisibleSurface> visible;
     double visible_s = 0.0;
     if (!no_coverage) {
-      if (!quiet) std::cerr << "surface_accuracy: the visible surface (oracle scans, " << oracle.planes << " planes)...\n";
+      if (!quiet)
+        std::cerr << "surface_accuracy: the visible surface (oracle scans, " << oracle.planes << " planes)...\n";
       visible = std::make_unique<eval::VisibleSurface>(eval::visibleSurface(*sim, start, oracle));
       visible_s = visible->seconds;
     }
@@ -122,25 +123,27 @@ int main(int argc, char** argv) {
       std::cout << "{\"world\": " << jsonString(world_path) << ", \"input\": " << jsonString(input_path)
                 << ", \"kind\": " << jsonString(eval::kindName(input.kind)) << ", \"start\": [" << jsonNumber(start.x)
                 << ", " << jsonNumber(start.y) << ", " << jsonNumber(start.yaw) << "], \"scans\": " << input.scans
-                << ", \"triangles\": " << r.triangles << ", \"vertices\": " << r.vertices << ", \"points\": " << r.points
-                << ", \"samples\": " << r.samples << ", \"sample_m\": " << jsonNumber(config.sample_spacing_m)
+                << ", \"triangles\": " << r.triangles << ", \"vertices\": " << r.vertices
+                << ", \"points\": " << r.points << ", \"samples\": " << r.samples
+                << ", \"sample_m\": " << jsonNumber(config.sample_spacing_m)
                 << ", \"area_m2\": " << jsonNumber(r.area_m2, 6) << ",\n \"distance\": " << statsJson(r.vertex_distance)
                 << ",\n \"surface_distance\": " << statsJson(r.surface_distance) << ",\n \"coverage\": ";
       if (visible)
-        std::cout << "{\"tolerance_m\": " << jsonNumber(config.tolerance_m) << ", \"surface_cell_m\": "
-                  << jsonNumber(oracle.surface_cell_m) << ", \"planes\": " << oracle.planes << ", \"visible\": "
-                  << r.visible << ", \"covered\": " << r.covered << ", \"share\": " << jsonNumber(r.coverage, 6) << "}";
+        std::cout << "{\"tolerance_m\": " << jsonNumber(config.tolerance_m)
+                  << ", \"surface_cell_m\": " << jsonNumber(oracle.surface_cell_m) << ", \"planes\": " << oracle.planes
+                  << ", \"visible\": " << r.visible << ", \"covered\": " << r.covered
+                  << ", \"share\": " << jsonNumber(r.coverage, 6) << "}";
       else
         std::cout << "null";
-      std::cout << ",\n \"time_s\": {\"load\": " << jsonNumber(load_s, 4) << ", \"visible\": " << jsonNumber(visible_s, 4)
-                << ", \"distance\": " << jsonNumber(r.distance_s, 4) << ", \"coverage\": " << jsonNumber(r.coverage_s, 4)
-                << "}}\n";
+      std::cout << ",\n \"time_s\": {\"load\": " << jsonNumber(load_s, 4)
+                << ", \"visible\": " << jsonNumber(visible_s, 4) << ", \"distance\": " << jsonNumber(r.distance_s, 4)
+                << ", \"coverage\": " << jsonNumber(r.coverage_s, 4) << "}}\n";
     } else {
       std::printf("surface_accuracy: %s (%s) against %s, map frame at (%g, %g, %g) in the world\n", input_path.c_str(),
                   eval::kindName(input.kind), world_path.c_str(), start.x, start.y, start.yaw);
       if (mesh) {
-        std::printf("mesh: %zu triangles, %zu vertices, %.2f m2, %zu face samples every %g m\n", r.triangles, r.vertices,
-                    r.area_m2, r.samples, config.sample_spacing_m);
+        std::printf("mesh: %zu triangles, %zu vertices, %.2f m2, %zu face samples every %g m\n", r.triangles,
+                    r.vertices, r.area_m2, r.samples, config.sample_spacing_m);
         printStats("vertices to the world:", r.vertex_distance);
         printStats("surface (area-weighted):", r.surface_distance);
       } else {

@@ -38,7 +38,7 @@ test::Scene fourRooms() {
     test::box(s, 9.8, c, 10.2, c + 1.0, 1);
     test::box(s, c, 9.8, c + 1.0, 10.2, 1);
   }
-  test::box(s, 2.0, 2.0, 3.5, 2.8, 0);     // furniture
+  test::box(s, 2.0, 2.0, 3.5, 2.8, 0);  // furniture
   test::box(s, 14.0, 5.0, 14.6, 8.0, 0);
   test::box(s, 6.0, 14.0, 8.0, 15.0, 0);
   test::disc(s, 15.0, 15.0, 0.4, 0);
@@ -115,13 +115,18 @@ int main(int argc, char** argv) {
     }
     const GridGeometry& g = last.geometry;
     const double t_total = median(total);
-    std::printf("\n%s\ngrid %d x %d = %d cells (%.2f m), %zu scans; full planning step (median of %d): %.2f ms  "
-                "[target < 100 ms]\n", title, g.width, g.height, g.width * g.height, g.resolution, set.size(), repeat, t_total);
+    std::printf(
+        "\n%s\ngrid %d x %d = %d cells (%.2f m), %zu scans; full planning step (median of %d): %.2f ms  "
+        "[target < 100 ms]\n",
+        title, g.width, g.height, g.width * g.height, g.resolution, set.size(), repeat, t_total);
     for (const std::string& name : order)
-      std::printf("  %-28s %8.2f ms  %5.1f %%\n", name.c_str(), median(stage[name]), 100.0 * median(stage[name]) / t_total);
-    std::printf("  floor %.1f m^2, reachable %.1f m^2, landmarks %zu (coverage landmarks %d), graph edges %zu, open cells %zu, %s\n",
-                last.floor_area_m2, last.reachable_area_m2, last.cost_map.nodes.size() - 1, last.cost_map.coverage_landmarks,
-                last.cost_map.graph.edgeCount(), last.open_cells, last.complete ? "complete" : "not complete");
+      std::printf("  %-28s %8.2f ms  %5.1f %%\n", name.c_str(), median(stage[name]),
+                  100.0 * median(stage[name]) / t_total);
+    std::printf(
+        "  floor %.1f m^2, reachable %.1f m^2, landmarks %zu (coverage landmarks %d), graph edges %zu, open cells %zu, "
+        "%s\n",
+        last.floor_area_m2, last.reachable_area_m2, last.cost_map.nodes.size() - 1, last.cost_map.coverage_landmarks,
+        last.cost_map.graph.edgeCount(), last.open_cells, last.complete ? "complete" : "not complete");
   };
   // (b) 20 scans spread over all four rooms (8 m range): nearly the whole map known.
   std::vector<std::pair<Pose2D, std::vector<Eigen::Vector3f>>> spread;

@@ -18,7 +18,8 @@ template <typename Emit>
 bool meijster(const cv::Mat& mask, Emit emit) {
   if (mask.type() != CV_8U) throw std::invalid_argument("distance transform: mask must be CV_8U");
   const int w = mask.cols, h = mask.rows;
-  if (static_cast<long>(w) + h > 20000) throw std::invalid_argument("distance transform: image larger than 20000 pixels");
+  if (static_cast<long>(w) + h > 20000)
+    throw std::invalid_argument("distance transform: image larger than 20000 pixels");
   const int inf = w + h + 1;  // larger than any in-image distance
   std::vector<int> g(static_cast<size_t>(w) * h);
   for (int x = 0; x < w; ++x) g[x] = mask.at<uint8_t>(0, x) ? inf : 0;
@@ -86,7 +87,8 @@ cv::Mat squaredDistanceTransform(const cv::Mat& mask) {
 
 cv::Mat distanceTransform(const cv::Mat& mask) {
   cv::Mat out(mask.size(), CV_32F);
-  const bool any = meijster(mask, [&](int y, int x, int d) { out.ptr<float>(y)[x] = std::sqrt(static_cast<float>(d)); });
+  const bool any =
+      meijster(mask, [&](int y, int x, int d) { out.ptr<float>(y)[x] = std::sqrt(static_cast<float>(d)); });
   if (!any) out.setTo(std::sqrt(static_cast<float>(kNoBackground)));
   return out;
 }

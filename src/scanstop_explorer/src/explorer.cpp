@@ -176,7 +176,8 @@ PlanResult Explorer::plan(const Pose2D& T_map_base, const std::optional<Eigen::V
       if (last_.failures >= config_.max_failed_attempts) {
         blacklist_.emplace_back(last_.target, config_.blacklist_radius_m);
         note = "; blacklisted the unreachable target (" + std::to_string(last_.target.x()) + ", " +
-               std::to_string(last_.target.y()) + ") after " + std::to_string(last_.failures) + " plans without progress";
+               std::to_string(last_.target.y()) + ") after " + std::to_string(last_.failures) +
+               " plans without progress";
         last_.active = false;
       }
     }

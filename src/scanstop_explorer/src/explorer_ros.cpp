@@ -89,7 +89,8 @@ void readParameters(const ros::NodeHandle& pnh, ExplorerConfig& c, NodeConfig& n
 std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, const NodeConfig& c) {
   std::ostringstream out;
   const std::string& frame = req.map_pose.header.frame_id;
-  if (!frame.empty() && frame != c.frame_id) return "map_pose is in frame '" + frame + "', expected '" + c.frame_id + "'";
+  if (!frame.empty() && frame != c.frame_id)
+    return "map_pose is in frame '" + frame + "', expected '" + c.frame_id + "'";
   const auto& p = req.map_pose.pose.position;
   const auto& q = req.map_pose.pose.orientation;
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
@@ -144,8 +145,8 @@ std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, cons
         return out.str();
       }
       if (std::hypot(u.x, u.y) > c.max_coordinate_m) {
-        out << name << "[" << i << "] (" << u.x << ", " << u.y << ") is beyond max_coordinate_m "
-            << c.max_coordinate_m << " m from the map origin";
+        out << name << "[" << i << "] (" << u.x << ", " << u.y << ") is beyond max_coordinate_m " << c.max_coordinate_m
+            << " m from the map origin";
         return out.str();
       }
     }
@@ -202,8 +203,9 @@ void ExplorerNode::loadMapDir() {
     const size_t added = explorer_->loadMapDirectory(MapDirectory(node_config_.map_dir), &problems, &moved);
     if (added) ROS_INFO("explorer_node: loaded %zu scans from %s", added, node_config_.map_dir.c_str());
     // SLAM's relaxation corrected earlier poses (poses.csv): the floor grid was rebuilt at them.
-    if (moved) ROS_INFO("explorer_node: %zu scans moved in %s/poses.csv: floor grid rebuilt at the corrected poses",
-                        moved, node_config_.map_dir.c_str());
+    if (moved)
+      ROS_INFO("explorer_node: %zu scans moved in %s/poses.csv: floor grid rebuilt at the corrected poses", moved,
+               node_config_.map_dir.c_str());
     for (const std::string& p : problems) ROS_ERROR("explorer_node: map_dir: %s", p.c_str());
   } catch (const std::exception& e) {
     ROS_ERROR("explorer_node: cannot load map_dir: %s", e.what());
@@ -262,9 +264,8 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
       ROS_WARN("explorer_node: contact at (%.2f, %.2f) reported by the caller: an obstacle disc of %.2f m from now on",
                p.x, p.y, explorer_->contacts().back().second);
   }
-  const PlanResult r =
-      explorer_->plan(robot, req.to_goal ? std::optional<Eigen::Vector2d>(Eigen::Vector2d(req.goal.x, req.goal.y))
-                                         : std::nullopt);
+  const PlanResult r = explorer_->plan(
+      robot, req.to_goal ? std::optional<Eigen::Vector2d>(Eigen::Vector2d(req.goal.x, req.goal.y)) : std::nullopt);
   const ros::Time now = ros::Time::now();
   res.success = r.success;
   res.message = r.message;
@@ -287,7 +288,8 @@ bool ExplorerNode::onPlanNext(scanstop_msgs::PlanNext::Request& req, scanstop_ms
       const Eigen::Vector2d d = r.path[a + 1] - r.path[a];
       if (d.norm() > 1e-9) yaw = std::atan2(d.y(), d.x());
     }
-    res.path.poses.push_back(ros_conv::toPoseStamped(Pose2D(r.path[i].x(), r.path[i].y(), yaw), node_config_.frame_id, now));
+    res.path.poses.push_back(
+        ros_conv::toPoseStamped(Pose2D(r.path[i].x(), r.path[i].y(), yaw), node_config_.frame_id, now));
     res.scan_at.push_back(r.scan_at[i]);
     res.clearance.push_back(i < r.clearance_m.size() ? r.clearance_m[i] : 0.0);
   }

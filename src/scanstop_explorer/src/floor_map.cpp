@@ -53,8 +53,8 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
   Eigen::Vector2d new_hi = hi.array() + config_.grid_margin_m;
   if (!empty()) {
     new_lo = new_lo.cwiseMin(Eigen::Vector2d(geometry_.origin_x, geometry_.origin_y));
-    new_hi = new_hi.cwiseMax(Eigen::Vector2d(geometry_.origin_x + geometry_.width * res,
-                                             geometry_.origin_y + geometry_.height * res));
+    new_hi = new_hi.cwiseMax(
+        Eigen::Vector2d(geometry_.origin_x + geometry_.width * res, geometry_.origin_y + geometry_.height * res));
   }
   // The size in double before any cast (a far-away pose overflowed long/int), capped at kMaxGridCells:
   // one far pose grew the grid (and the planner's images of it) to gigabytes (issue #22 class 3).
@@ -69,7 +69,8 @@ void FloorMap::ensureContains(const Eigen::Vector2d& lo, const Eigen::Vector2d& 
     throw std::length_error(what);
   }
   const long ix0 = static_cast<long>(fx0), iy0 = static_cast<long>(fy0);
-  const long ix1 = static_cast<long>(std::ceil(new_hi.x() / res)) + 1, iy1 = static_cast<long>(std::ceil(new_hi.y() / res)) + 1;
+  const long ix1 = static_cast<long>(std::ceil(new_hi.x() / res)) + 1,
+             iy1 = static_cast<long>(std::ceil(new_hi.y() / res)) + 1;
   GridGeometry g;
   g.resolution = res;
   g.origin_x = ix0 * res;
@@ -105,9 +106,12 @@ size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
   for (size_t i = 0; i < points_map.size(); ++i) {
     const Eigen::Vector3f& p = points_map[i];
     if (!p.allFinite() || std::abs(p.x()) > config_.max_extent_m || std::abs(p.y()) > config_.max_extent_m) continue;
-    if (std::abs(p.z()) <= half) kind[i] = 1;
-    else if (p.z() > half && p.z() <= top) kind[i] = 2;
-    else continue;
+    if (std::abs(p.z()) <= half)
+      kind[i] = 1;
+    else if (p.z() > half && p.z() <= top)
+      kind[i] = 2;
+    else
+      continue;
     lo = lo.cwiseMin(p.head<2>().cast<double>());
     hi = hi.cwiseMax(p.head<2>().cast<double>());
     ++used;
@@ -119,8 +123,10 @@ size_t FloorMap::addPoints(const std::vector<Eigen::Vector3f>& points_map) {
     if (kind[i] == 0) continue;
     const cv::Point c = geometry_.cellOf(points_map[i].x(), points_map[i].y());
     if (!geometry_.contains(c)) continue;  // cannot happen after ensureContains
-    if (kind[i] == 1) floor_hits_.at<int>(c)++;
-    else obstacle_cells.emplace_back(c.y * geometry_.width + c.x, 1);
+    if (kind[i] == 1)
+      floor_hits_.at<int>(c)++;
+    else
+      obstacle_cells.emplace_back(c.y * geometry_.width + c.x, 1);
   }
   // Obstacle evidence counts per scan: a cell becomes an obstacle when this scan alone put
   // min_obstacle_points points into it.
@@ -158,8 +164,10 @@ cv::Mat FloorMap::states() const {
     const uint8_t* o = obstacle.ptr<uint8_t>(r);
     uint8_t* out = s.ptr<uint8_t>(r);
     for (int c = 0; c < geometry_.width; ++c) {
-      if (o[c]) out[c] = kObstacle;
-      else if (f[c] >= config_.min_floor_points) out[c] = kFloor;
+      if (o[c])
+        out[c] = kObstacle;
+      else if (f[c] >= config_.min_floor_points)
+        out[c] = kFloor;
     }
   }
   // Known free discs: unknown cells the robot's position sees without crossing an obstacle cell.

@@ -41,8 +41,10 @@ void readValue(const YAML::Node& node, const std::string& where, T& value) {
       value = node.as<T>();
     }
   } catch (const YAML::Exception&) {
-    throw ConfigError(where + " = '" + (node.IsScalar() ? node.Scalar() : std::string("(not a value)")) +
-                      "' is not " + (std::is_same_v<T, bool> ? "true or false" : std::is_integral_v<T> ? "an integer" : "a number"));
+    throw ConfigError(where + " = '" + (node.IsScalar() ? node.Scalar() : std::string("(not a value)")) + "' is not " +
+                      (std::is_same_v<T, bool> ? "true or false"
+                       : std::is_integral_v<T> ? "an integer"
+                                               : "a number"));
   }
 }
 
@@ -69,7 +71,8 @@ void readParameterFile(const std::string& path, ExplorerConfig& c) {
     done.insert(name);
   });
   BodyMargins margins;
-  if (const YAML::Node n = root["inflation_margin_m"]) readValue(n, where("inflation_margin_m"), margins.inflation_margin_m);
+  if (const YAML::Node n = root["inflation_margin_m"])
+    readValue(n, where("inflation_margin_m"), margins.inflation_margin_m);
   if (const YAML::Node n = root["obstacle_height_margin_m"])
     readValue(n, where("obstacle_height_margin_m"), margins.obstacle_height_margin_m);
   try {
@@ -84,7 +87,8 @@ void readParameterFile(const std::string& path, ExplorerConfig& c) {
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
     if (!done.count(key))
-      throw ConfigError(path + ": unknown explorer parameter '" + key + "' (a typo? the names carry their unit, e.g. k_r_m)");
+      throw ConfigError(path + ": unknown explorer parameter '" + key +
+                        "' (a typo? the names carry their unit, e.g. k_r_m)");
   }
   try {
     c.validate();

@@ -62,8 +62,8 @@ int main(int argc, char** argv) {
   try {
     explorer::ExplorerConfig config;
     if (!config_file.empty()) explorer::readParameterFile(config_file, config);
-    const MapDirectory dir =
-        openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "plan_step: warning: " << w << "\n"; });
+    const MapDirectory dir = openMapForTool(
+        map_dir, skip_bad, [](const std::string& w) { std::cerr << "plan_step: warning: " << w << "\n"; });
     explorer::Explorer ex(config);
     std::vector<std::string> problems;
     ex.loadMapDirectory(dir, &problems);
@@ -80,9 +80,11 @@ int main(int argc, char** argv) {
     writeFileAtomic(out_dir + "/path.csv", explorer::pathToCsv(r));
     const std::string j = explorer::planToJson(r);
     writeFileAtomic(out_dir + "/plan.json", j + "\n");
-    if (json) std::cout << j << std::endl;
-    else std::cerr << (r.success ? "" : "planning failed: ") << r.message
-                   << (r.complete ? " (" + r.complete_reason + ")" : "") << "\n";
+    if (json)
+      std::cout << j << std::endl;
+    else
+      std::cerr << (r.success ? "" : "planning failed: ") << r.message
+                << (r.complete ? " (" + r.complete_reason + ")" : "") << "\n";
     return r.success ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "plan_step: " << e.what() << "\n";

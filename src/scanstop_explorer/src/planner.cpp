@@ -25,7 +25,9 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const cv::Point k4[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
 
-inline bool inside(const cv::Mat& m, const cv::Point& p) { return p.x >= 0 && p.y >= 0 && p.x < m.cols && p.y < m.rows; }
+inline bool inside(const cv::Mat& m, const cv::Point& p) {
+  return p.x >= 0 && p.y >= 0 && p.x < m.cols && p.y < m.rows;
+}
 
 std::string fmt(double v, int precision = 2) {
   std::ostringstream s;
@@ -53,11 +55,16 @@ class StageTimer {
 
 const char* landmarkKindName(Landmark::Kind kind) {
   switch (kind) {
-    case Landmark::kRobot: return "robot";
-    case Landmark::kAnchor: return "anchor";
-    case Landmark::kSpecial: return "special";
-    case Landmark::kExtra: return "extra";
-    case Landmark::kCoverage: return "coverage";
+    case Landmark::kRobot:
+      return "robot";
+    case Landmark::kAnchor:
+      return "anchor";
+    case Landmark::kSpecial:
+      return "special";
+    case Landmark::kExtra:
+      return "extra";
+    case Landmark::kCoverage:
+      return "coverage";
   }
   return "?";
 }
@@ -206,7 +213,7 @@ std::vector<Landmark> selectLandmarks(const cv::Mat& accessible, const cv::Mat& 
   const double d2max = d_max_cells * d_max_cells;
   for (const auto& m : meetings) {
     std::vector<cv::Point> path = trace(m.second.first);
-    std::reverse(path.begin(), path.end());  // landmark a ... meeting pixel
+    std::reverse(path.begin(), path.end());                      // landmark a ... meeting pixel
     const std::vector<cv::Point> tail = trace(m.second.second);  // meeting pixel ... landmark b
     path.insert(path.end(), tail.begin(), tail.end());
     std::vector<std::pair<size_t, size_t>> todo{{0, path.size() - 1}};
@@ -256,8 +263,8 @@ Graph reachabilityGraph(const std::vector<Landmark>& nodes, const cv::Mat& acces
   return g;
 }
 
-std::vector<int> dijkstra(const Graph& graph, const std::vector<std::pair<int, double>>& seeds, std::vector<double>& dist,
-                          std::vector<int>& pred) {
+std::vector<int> dijkstra(const Graph& graph, const std::vector<std::pair<int, double>>& seeds,
+                          std::vector<double>& dist, std::vector<int>& pred) {
   dist.resize(graph.adjacency.size(), kInf);
   pred.resize(graph.adjacency.size(), -1);
   using Item = std::pair<double, int>;
@@ -319,8 +326,8 @@ void sweepNode(CostMap& cm, const cv::Mat& accessible, int n, double d_max_cells
 }
 }  // namespace
 
-CostMap computeCostMap(const cv::Mat& accessible, const std::vector<Landmark>& landmarks, const Eigen::Vector2d& robot_pos,
-                       double d_max_cells, int max_coverage_landmarks) {
+CostMap computeCostMap(const cv::Mat& accessible, const std::vector<Landmark>& landmarks,
+                       const Eigen::Vector2d& robot_pos, double d_max_cells, int max_coverage_landmarks) {
   CostMap cm;
   Landmark robot(cv::Point(static_cast<int>(std::floor(robot_pos.x())), static_cast<int>(std::floor(robot_pos.y()))),
                  Landmark::kRobot);
@@ -407,8 +414,7 @@ cv::Mat evaluationMap(const cv::Mat& knowledge, const cv::Mat& cost_cells, doubl
     for (int c = 0; c < b.cols; ++c) {
       const float cost = cost_cells.at<float>(r, c);
       if (!std::isfinite(cost) || (!blacklist.empty() && blacklist.at<uint8_t>(r, c))) continue;
-      b.at<float>(r, c) =
-          static_cast<float>(1.0 / (knowledge.at<float>(r, c) + k0) * 1.0 / (cost * resolution + c0));
+      b.at<float>(r, c) = static_cast<float>(1.0 / (knowledge.at<float>(r, c) + k0) * 1.0 / (cost * resolution + c0));
     }
   return b;
 }
@@ -446,7 +452,8 @@ cv::Point clearTarget(const cv::Mat& sq_dt, const cv::Mat& allowed, const cv::Po
   long best_d2 = std::numeric_limits<long>::max();
   for (int r = std::max(0, target.y - reach); r <= std::min(sq_dt.rows - 1, target.y + reach); ++r)
     for (int c = std::max(0, target.x - reach); c <= std::min(sq_dt.cols - 1, target.x + reach); ++c) {
-      const long d2 = static_cast<long>(c - target.x) * (c - target.x) + static_cast<long>(r - target.y) * (r - target.y);
+      const long d2 =
+          static_cast<long>(c - target.x) * (c - target.x) + static_cast<long>(r - target.y) * (r - target.y);
       if (d2 > need || d2 >= best_d2) continue;
       if (!allowed.at<uint8_t>(r, c) || sq_dt.at<int>(r, c) < need) continue;
       best_d2 = d2;
@@ -597,10 +604,12 @@ PlanResult computeMaps(const PlanInput& in, const PlannerConfig& cfg) {
   res.skeleton = vincentSkeleton(res.accessible, res.anchors, &res.skeleton_unpruned);
   timer.lap("skeleton");
   const double d_max_cells = cfg.d_max_m / res_m;
-  const std::vector<Landmark> landmarks = selectLandmarks(res.accessible, res.sq_dt, res.anchors, res.skeleton, d_max_cells);
+  const std::vector<Landmark> landmarks =
+      selectLandmarks(res.accessible, res.sq_dt, res.anchors, res.skeleton, d_max_cells);
   timer.lap("landmarks");
-  res.knowledge = cfg.knowledge_model == "visibility" ? visibilityKnowledgeMap(in.states, g, in.scan_positions, cfg.k_r_m)
-                                                       : knowledgeMap(g, in.scan_positions, cfg.k_r_m);
+  res.knowledge = cfg.knowledge_model == "visibility"
+                      ? visibilityKnowledgeMap(in.states, g, in.scan_positions, cfg.k_r_m)
+                      : knowledgeMap(g, in.scan_positions, cfg.k_r_m);
   timer.lap("knowledge");
   res.floor_area_m2 = cv::countNonZero(in.states == kFloor) * g.cellArea();
   res.accessible_area_m2 = cv::countNonZero(res.accessible) * g.cellArea();
@@ -612,8 +621,10 @@ PlanResult computeMaps(const PlanInput& in, const PlannerConfig& cfg) {
     const double snap = cfg.start_snap_m / res_m;
     double best = kInf;
     cv::Point best_cell(-1, -1);
-    for (int r = static_cast<int>(std::floor(robot_pos.y() - snap)); r <= static_cast<int>(std::ceil(robot_pos.y() + snap)); ++r)
-      for (int c = static_cast<int>(std::floor(robot_pos.x() - snap)); c <= static_cast<int>(std::ceil(robot_pos.x() + snap)); ++c) {
+    for (int r = static_cast<int>(std::floor(robot_pos.y() - snap));
+         r <= static_cast<int>(std::ceil(robot_pos.y() + snap)); ++r)
+      for (int c = static_cast<int>(std::floor(robot_pos.x() - snap));
+           c <= static_cast<int>(std::ceil(robot_pos.x() + snap)); ++c) {
         if (!inside(res.accessible, {c, r}) || !res.accessible.at<uint8_t>(r, c)) continue;
         const double d = (Eigen::Vector2d(c + 0.5, r + 0.5) - robot_pos).norm();
         if (d <= snap && d < best) {
@@ -673,11 +684,11 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   res.evaluation = evaluationMap(res.knowledge, res.cost_map.cost, res_m, cfg.k0, cfg.c0, res.blacklist);
   const cv::Mat frontier = frontierCells(res.states, cfg.frontier_min_unknown_m / res_m, cfg.ignore_wall_base_frontier);
   if (cfg.occluded_frontier_knowledge > cfg.knowledge_threshold)
-    res.occluded_frontier = occludedFrontier(res.states, g, in.scan_positions, cfg.k_r_m,
-                                             cfg.occluded_frontier_min_m / res_m, frontier);
-  res.open = openCells(res.states, res.cost_map.cost, res.knowledge, res.blacklist, cfg.knowledge_threshold,
-                       cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge,
-                       frontier);
+    res.occluded_frontier =
+        occludedFrontier(res.states, g, in.scan_positions, cfg.k_r_m, cfg.occluded_frontier_min_m / res_m, frontier);
+  res.open =
+      openCells(res.states, res.cost_map.cost, res.knowledge, res.blacklist, cfg.knowledge_threshold,
+                cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge, frontier);
   timer.lap("evaluation_and_termination");
   res.open_cells = static_cast<size_t>(cv::countNonZero(res.open));
   const cv::Mat reached = res.cost_map.predecessor >= 0;
@@ -694,15 +705,15 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   res.target_cost_m = 0.0;
   res.complete = res.open_cells == 0;
   if (res.complete) {
-    res.complete_reason = "no reachable cell within frontier_distance_m = " + fmt(cfg.frontier_distance_m) +
-                          " m of unknown space has knowledge below knowledge_threshold = " +
-                          fmt(cfg.knowledge_threshold) +
-                          (res.occluded_frontier.empty()
-                               ? std::string()
-                               : " (below occluded_frontier_knowledge = " + fmt(cfg.occluded_frontier_knowledge) +
-                                     " next to a frontier no scan has in sight)") +
-                          " (" + std::to_string(n_reached) + " reachable cells, " +
-                          std::to_string(n_black) + " blacklisted as unreachable)";
+    res.complete_reason =
+        "no reachable cell within frontier_distance_m = " + fmt(cfg.frontier_distance_m) +
+        " m of unknown space has knowledge below knowledge_threshold = " + fmt(cfg.knowledge_threshold) +
+        (res.occluded_frontier.empty()
+             ? std::string()
+             : " (below occluded_frontier_knowledge = " + fmt(cfg.occluded_frontier_knowledge) +
+                   " next to a frontier no scan has in sight)") +
+        " (" + std::to_string(n_reached) + " reachable cells, " + std::to_string(n_black) +
+        " blacklisted as unreachable)";
     res.message = "exploration complete";
     if (!in.goal) return;
   }
@@ -762,16 +773,17 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   for (size_t i = 0; i < res.path.size(); ++i)
     res.clearance_m.push_back(legClearance(res.sq_dt, g, res.path[i == 0 ? 0 : i - 1], res.path[i]));
   timer.lap("path");
-  res.message = std::string(in.goal ? (res.complete ? "exploration complete; " : "") + std::string("to the goal: ") : "") +
-                "target (" + fmt(res.target.x()) + ", " + fmt(res.target.y()) + ") m, " +
-                std::to_string(res.path.size()) + " waypoints, " + fmt(res.target_cost_m) + " m, b = " +
-                fmt(res.score, 4) +
-                (res.target_gain_m2 >= 0.0 ? " (expected gain " + fmt(res.target_gain_m2, 1) + " m^2)" : std::string()) +
-                ", " + std::to_string(res.open_cells) + " open cells" +
-                (res.target_moved_m > 0.0 ? " (moved " + fmt(res.target_moved_m) + " m off the wall)" : "");
+  res.message =
+      std::string(in.goal ? (res.complete ? "exploration complete; " : "") + std::string("to the goal: ") : "") +
+      "target (" + fmt(res.target.x()) + ", " + fmt(res.target.y()) + ") m, " + std::to_string(res.path.size()) +
+      " waypoints, " + fmt(res.target_cost_m) + " m, b = " + fmt(res.score, 4) +
+      (res.target_gain_m2 >= 0.0 ? " (expected gain " + fmt(res.target_gain_m2, 1) + " m^2)" : std::string()) + ", " +
+      std::to_string(res.open_cells) + " open cells" +
+      (res.target_moved_m > 0.0 ? " (moved " + fmt(res.target_moved_m) + " m off the wall)" : "");
 }
 
-double legClearance(const cv::Mat& sq_dt, const GridGeometry& geometry, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+double legClearance(const cv::Mat& sq_dt, const GridGeometry& geometry, const Eigen::Vector2d& a,
+                    const Eigen::Vector2d& b) {
   const Eigen::Vector2d ga = geometry.toGrid(a), gb = geometry.toGrid(b);
   const int samples = 1 + static_cast<int>(std::ceil(2.0 * (gb - ga).norm()));  // every half cell
   double min_sq = std::numeric_limits<double>::infinity();

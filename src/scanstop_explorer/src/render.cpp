@@ -49,10 +49,14 @@ std::string num(double v) {
 std::string quote(const std::string& text) {
   std::string out = "\"";
   for (char ch : text) {
-    if (ch == '"' || ch == '\\') out += '\\', out += ch;
-    else if (ch == '\n') out += "\\n";
-    else if (static_cast<unsigned char>(ch) < 0x20) out += ' ';
-    else out += ch;
+    if (ch == '"' || ch == '\\')
+      out += '\\', out += ch;
+    else if (ch == '\n')
+      out += "\\n";
+    else if (static_cast<unsigned char>(ch) < 0x20)
+      out += ' ';
+    else
+      out += ch;
   }
   return out + "\"";
 }
@@ -104,7 +108,8 @@ cv::Mat withLegend(const cv::Mat& map, double px_per_m, const std::vector<Legend
   cv::line(out, {pad, by}, {pad + bar_px, by}, cv::Scalar(0, 0, 0), 2);
   cv::line(out, {pad, by - 4}, {pad, by + 2}, cv::Scalar(0, 0, 0), 1);
   cv::line(out, {pad + bar_px, by - 4}, {pad + bar_px, by + 2}, cv::Scalar(0, 0, 0), 1);
-  cv::putText(out, bar_label.str(), {pad + bar_px + 6, baseline(0)}, font, font_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(out, bar_label.str(), {pad + bar_px + 6, baseline(0)}, font, font_scale, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
   for (size_t i = 0; i < items.size(); ++i) {
     const LegendItem& it = items[i];
     const int x0 = placed[i].x, y = baseline(placed[i].row);
@@ -161,7 +166,8 @@ std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& 
     return cv::Point(static_cast<int>(std::lround(q.x())), static_cast<int>(std::lround(q.y())));
   };
   auto pxCell = [&](const Eigen::Vector2d& p_cells) {
-    return cv::Point(static_cast<int>(std::lround(p_cells.x() * scale)), static_cast<int>(std::lround(p_cells.y() * scale)));
+    return cv::Point(static_cast<int>(std::lround(p_cells.x() * scale)),
+                     static_cast<int>(std::lround(p_cells.y() * scale)));
   };
   for (auto& [name, img] : out) {
     cv::resize(img, img, cv::Size(), scale, scale, cv::INTER_NEAREST);
@@ -169,27 +175,28 @@ std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& 
       cv::circle(img, pxCell(res.cost_map.nodes[i].pos), std::max(1, scale), cv::Scalar(0, 0, 255), cv::FILLED);
     for (size_t i = 1; i < res.path.size(); ++i)
       cv::line(img, px(res.path[i - 1]), px(res.path[i]), cv::Scalar(255, 255, 0), std::max(1, scale / 2));
-    if (res.target_cell.x >= 0) cv::circle(img, px(res.target), 2 * scale, cv::Scalar(255, 0, 255), std::max(1, scale / 2));
+    if (res.target_cell.x >= 0)
+      cv::circle(img, px(res.target), 2 * scale, cv::Scalar(255, 0, 255), std::max(1, scale / 2));
     const Eigen::Vector2d robot(res.robot.x, res.robot.y);
     const Eigen::Vector2d head = robot + 0.4 * Eigen::Vector2d(std::cos(res.robot.yaw), std::sin(res.robot.yaw));
-    cv::circle(img, px(robot), std::max(2, static_cast<int>(std::lround(0.2 / g.resolution * scale))), cv::Scalar(0, 200, 0),
-               std::max(1, scale / 2));
+    cv::circle(img, px(robot), std::max(2, static_cast<int>(std::lround(0.2 / g.resolution * scale))),
+               cv::Scalar(0, 200, 0), std::max(1, scale / 2));
     cv::line(img, px(robot), px(head), cv::Scalar(0, 200, 0), std::max(1, scale / 2));
     cv::flip(img, img, 0);  // row 0 is the lowest y: put north up
     // The legend: what this layer's colours mean, then what every layer has drawn in.
     std::vector<LegendItem> items;
     if (name == "floor") {
-      items = {{cv::Scalar(128, 128, 128), "floor"},
-               {cv::Scalar(0, 0, 220), "obstacle"},
-               {cv::Scalar(0, 0, 0), "unknown"}};
+      items = {
+          {cv::Scalar(128, 128, 128), "floor"}, {cv::Scalar(0, 0, 220), "obstacle"}, {cv::Scalar(0, 0, 0), "unknown"}};
       if (!res.open.empty()) items.push_back({cv::Scalar(0, 160, 255), "open cell"});
     } else if (name == "distance") {
       items = {{cv::Scalar(200, 200, 200), "brighter: farther from obstacles"},
                {cv::Scalar(255, 120, 0), "skeleton"},
                {cv::Scalar(0, 255, 255), "anchor"}};
     } else {
-      const char* what = name == "cost" ? "brighter: farther to go" : name == "knowledge" ? "brighter: better known"
-                                                                                         : "brighter: better target";
+      const char* what = name == "cost"        ? "brighter: farther to go"
+                         : name == "knowledge" ? "brighter: better known"
+                                               : "brighter: better target";
       items = {{cv::Scalar(200, 200, 200), what}};
     }
     items.push_back({cv::Scalar(0, 200, 0), "robot", LegendItem::kRing});
@@ -243,8 +250,9 @@ std::string planToJson(const PlanResult& r) {
     << ", \"complete\": " << (r.complete ? "true" : "false") << ", \"complete_reason\": " << quote(r.complete_reason)
     << ", \"target\": {\"x\": " << num(r.target.x()) << ", \"y\": " << num(r.target.y()) << "}"
     << ", \"score\": " << num(r.score) << ", \"cost_m\": " << num(r.target_cost_m)
-    << ", \"target_moved_m\": " << num(r.target_moved_m) << ", \"target_gain_m2\": " << num(r.target_gain_m2) << ", \"coverage\": " << num(r.coverage)
-    << ", \"floor_area_m2\": " << num(r.floor_area_m2) << ", \"accessible_area_m2\": " << num(r.accessible_area_m2)
+    << ", \"target_moved_m\": " << num(r.target_moved_m) << ", \"target_gain_m2\": " << num(r.target_gain_m2)
+    << ", \"coverage\": " << num(r.coverage) << ", \"floor_area_m2\": " << num(r.floor_area_m2)
+    << ", \"accessible_area_m2\": " << num(r.accessible_area_m2)
     << ", \"reachable_area_m2\": " << num(r.reachable_area_m2) << ", \"open_cells\": " << r.open_cells
     << ", \"landmarks\": " << (r.cost_map.nodes.empty() ? 0 : r.cost_map.nodes.size() - 1)
     << ", \"coverage_landmarks\": " << r.cost_map.coverage_landmarks << ", \"path\": [";
@@ -263,7 +271,8 @@ std::string pathToCsv(const PlanResult& r) {
   std::ostringstream s;
   s.precision(10);
   s << "x,y,scan\n";
-  for (size_t i = 0; i < r.path.size(); ++i) s << r.path[i].x() << "," << r.path[i].y() << "," << (r.scan_at[i] ? 1 : 0) << "\n";
+  for (size_t i = 0; i < r.path.size(); ++i)
+    s << r.path[i].x() << "," << r.path[i].y() << "," << (r.scan_at[i] ? 1 : 0) << "\n";
   return s.str();
 }
 

@@ -9,8 +9,8 @@
 namespace scanstop {
 namespace explorer {
 
-const std::array<cv::Point, 8> kNeighbourOffsets = {cv::Point(1, 0),  cv::Point(1, 1),   cv::Point(0, 1),
-                                                    cv::Point(-1, 1), cv::Point(-1, 0),  cv::Point(-1, -1),
+const std::array<cv::Point, 8> kNeighbourOffsets = {cv::Point(1, 0),  cv::Point(1, 1),  cv::Point(0, 1),
+                                                    cv::Point(-1, 1), cv::Point(-1, 0), cv::Point(-1, -1),
                                                     cv::Point(0, -1), cv::Point(1, -1)};
 
 namespace {
@@ -135,7 +135,8 @@ cv::Mat findAnchors(const cv::Mat& sq_dt, const cv::Mat& mask) {
   for (int r = 0; r < anchors.rows; ++r)
     for (int c = 0; c < anchors.cols; ++c)
       if (anchors.at<uint8_t>(r, c)) candidates.emplace_back(sq_dt.at<int>(r, c), cv::Point(c, r));
-  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
   cv::Mat covered = cv::Mat::zeros(mask.size(), CV_8U);
   anchors.setTo(0);
   for (const auto& [sq, p] : candidates) {
@@ -177,8 +178,10 @@ cv::Mat vincentSkeleton(const cv::Mat& mask, const cv::Mat& anchors, cv::Mat* af
         fifo.push_back(q);
       }
     }
-    if (relevant[codeAt(I, p.y, p.x)]) tab.push_back(p);
-    else I.at<uint8_t>(p) = 0;
+    if (relevant[codeAt(I, p.y, p.x)])
+      tab.push_back(p);
+    else
+      I.at<uint8_t>(p) = 0;
   }
   if (after_propagation) *after_propagation = (I != 0) / 255;
   // Pruning.

@@ -3,8 +3,8 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
-#include "scenes.h"
 #include "scanstop_explorer/distance_transform.h"
+#include "scenes.h"
 
 using namespace scanstop::explorer;
 
@@ -21,7 +21,8 @@ void expectEqualToOpenCv(const cv::Mat& mask, const std::string& what) {
   int bad = 0;
   for (int r = 0; r < mask.rows; ++r)
     for (int c = 0; c < mask.cols; ++c)
-      if (std::abs(ours.at<float>(r, c) - ref.at<float>(r, c)) > 1e-4f * std::max(1.0f, ref.at<float>(r, c)) && bad++ < 5)
+      if (std::abs(ours.at<float>(r, c) - ref.at<float>(r, c)) > 1e-4f * std::max(1.0f, ref.at<float>(r, c)) &&
+          bad++ < 5)
         ADD_FAILURE() << what << " at (" << c << ", " << r << "): ours " << ours.at<float>(r, c) << " opencv "
                       << ref.at<float>(r, c);
   EXPECT_EQ(bad, 0) << what;
@@ -60,9 +61,9 @@ TEST(DistanceTransform, EqualsOpenCvOnRandomGrids) {
 
 TEST(DistanceTransform, EqualsOpenCvOnTestScenes) {
   using namespace scanstop::explorer::test;
-  for (const auto& [name, scene] : {std::make_pair("corridor", corridor()), std::make_pair("two rooms", twoRooms()),
-                                    std::make_pair("L", lShape()), std::make_pair("donut", donut()),
-                                    std::make_pair("table", tableRoom())}) {
+  for (const auto& [name, scene] :
+       {std::make_pair("corridor", corridor()), std::make_pair("two rooms", twoRooms()), std::make_pair("L", lShape()),
+        std::make_pair("donut", donut()), std::make_pair("table", tableRoom())}) {
     expectEqualToOpenCv(scene.free, name);
     expectEqualToOpenCv(floorMask(idealStates(scene)), std::string(name) + " floor");
   }

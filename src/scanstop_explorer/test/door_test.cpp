@@ -12,10 +12,10 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "scenes.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/floor_map.h"
 #include "scanstop_explorer/planner.h"
+#include "scenes.h"
 
 using namespace scanstop::explorer;
 using scanstop::Pose2D;
@@ -28,10 +28,10 @@ constexpr double kWallY0 = 3.0, kWallY1 = 3.1, kDoorX0 = 1.5;
 
 struct WallSpec {
   double door_width = 0.9;
-  double jamb_sigma = 0.015;      ///< [m] noise of every wall point (x and y)
-  int scans = 4;                  ///< scans of the same wall, each with its own noise and pose error
-  double pose_sigma = 0.01;       ///< [m] per-scan offset of all points (registration error)
-  double hole_x = -1.0;           ///< a wall column [hole_x, hole_x + 0.05) without points (< 0: none)
+  double jamb_sigma = 0.015;           ///< [m] noise of every wall point (x and y)
+  int scans = 4;                       ///< scans of the same wall, each with its own noise and pose error
+  double pose_sigma = 0.01;            ///< [m] per-scan offset of all points (registration error)
+  double hole_x = -1.0;                ///< a wall column [hole_x, hole_x + 0.05) without points (< 0: none)
   std::vector<Eigen::Vector2d> stray;  ///< cells that get a pair of stray readings in scan 0
 };
 
@@ -144,7 +144,7 @@ TEST(Door, A50cmGapStaysClosed) {
 TEST(Door, AWallWithAOneCellHoleStaysClosed) {
   WallSpec w;
   w.door_width = 0.0;
-  w.hole_x = 2.5;  // one 5 cm column of the wall got no points in any scan
+  w.hole_x = 2.5;      // one 5 cm column of the wall got no points in any scan
   w.jamb_sigma = 0.0;  // (noise would spill points of the neighbouring columns into it)
   w.pose_sigma = 0.0;
   const FloorMap fm = wallMap(w);
@@ -195,7 +195,7 @@ TEST(FloorMap, SpeckleRemovalKeepsAThinLegAndClearsStrayPairs) {
   FloorMap fm;  // speckle_min_points 5, speckle_max_cells 2
   std::vector<Eigen::Vector3f> scan;
   for (float z = 0.06f; z < 0.6f; z += 0.03f) scan.emplace_back(3.02f, 3.02f, z);  // a 4 cm leg: 18 points in one cell
-  scan.emplace_back(1.01f, 1.01f, 0.3f);  // a stray pair
+  scan.emplace_back(1.01f, 1.01f, 0.3f);                                           // a stray pair
   scan.emplace_back(1.02f, 1.03f, 0.4f);
   for (float x = 5.0f; x < 6.0f; x += 0.02f)  // a wall: a long component of weak cells (2-3 points each)
     for (float z : {0.2f, 0.4f}) scan.emplace_back(x, 2.0f, z);

@@ -10,11 +10,11 @@
 #include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 
-#include "scenes.h"
-#include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/error.h"
+#include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/explorer_ros.h"
+#include "scenes.h"
 
 using namespace scanstop;
 using namespace scanstop::explorer;
@@ -64,8 +64,8 @@ TEST(ExplorerNode, PlansCollisionFreePathsFromRegisteredScans) {
   const test::Scene world = test::twoRooms();
   ros::Publisher pub = nh.advertise<scanstop_msgs::RegisteredScan>("slam/registered_scan", 10);
   nav_msgs::OccupancyGrid floor;
-  ros::Subscriber floor_sub =
-      nh.subscribe<nav_msgs::OccupancyGrid>("explorer/floor", 1, [&](const nav_msgs::OccupancyGridConstPtr& m) { floor = *m; });
+  ros::Subscriber floor_sub = nh.subscribe<nav_msgs::OccupancyGrid>(
+      "explorer/floor", 1, [&](const nav_msgs::OccupancyGridConstPtr& m) { floor = *m; });
   size_t landmarks = 0;
   ros::Subscriber lm_sub = nh.subscribe<visualization_msgs::Marker>(
       "explorer/landmarks", 1, [&](const visualization_msgs::MarkerConstPtr& m) { landmarks = m->points.size(); });

@@ -20,7 +20,7 @@ using scanstop::Pose2D;
 namespace ros_conv = scanstop::ros_conv;
 
 namespace {
-constexpr double kSimRobotRadius = 0.26;  // config/robot_body.yaml robot_body/radius
+constexpr double kSimRobotRadius = 0.26;    // config/robot_body.yaml robot_body/radius
 const Pose2D kStartInWorld(2.0, 5.0, 0.0);  // room_10x8's documented start pose (map = start pose)
 
 // The latest ground truth; sim_node publishes it (latched) after every step.

@@ -8,11 +8,11 @@
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 
-#include "scenes.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_explorer/explorer.h"
 #include "scanstop_explorer/render.h"
+#include "scenes.h"
 
 using namespace scanstop::explorer;
 using scanstop::Pose2D;
@@ -43,19 +43,23 @@ TEST(FloorMap, LayersMarkFloorObstaclesAndUnknown) {
   const cv::Mat s = fm.states();
   const GridGeometry& g = fm.geometry();
   EXPECT_EQ(s.at<uint8_t>(g.cellOf(1.0, 1.5)), kFloor);
-  EXPECT_EQ(s.at<uint8_t>(g.cellOf(2.0, 1.0)), kObstacle);  // table leg
-  EXPECT_EQ(s.at<uint8_t>(g.cellOf(2.5, 1.4)), kFloor);     // under the table top
+  EXPECT_EQ(s.at<uint8_t>(g.cellOf(2.0, 1.0)), kObstacle);    // table leg
+  EXPECT_EQ(s.at<uint8_t>(g.cellOf(2.5, 1.4)), kFloor);       // under the table top
   EXPECT_EQ(s.at<uint8_t>(g.cellOf(1.0, -0.02)), kObstacle);  // wall
   EXPECT_EQ(s.at<uint8_t>(g.cellOf(-0.5, 1.5)), kUnknown);    // margin outside the data
-  EXPECT_LE(g.origin_x, -0.9);  // 1 m margin
+  EXPECT_LE(g.origin_x, -0.9);                                // 1 m margin
 }
 
 TEST(FloorMap, GridGrowsAndKeepsCellsInPlace) {
   FloorMap fm;
   // Five obstacle points in one cell: enough for a lone obstacle cell (speckle_min_points 5), and the
   // per-cell evidence must survive the growth of the grid.
-  fm.addPoints({{0.51f, 0.51f, 0.0f}, {1.01f, 0.51f, 0.3f}, {1.02f, 0.52f, 0.5f}, {1.03f, 0.53f, 0.2f},
-                {1.04f, 0.51f, 0.4f}, {1.01f, 0.54f, 0.1f}});
+  fm.addPoints({{0.51f, 0.51f, 0.0f},
+                {1.01f, 0.51f, 0.3f},
+                {1.02f, 0.52f, 0.5f},
+                {1.03f, 0.53f, 0.2f},
+                {1.04f, 0.51f, 0.4f},
+                {1.01f, 0.54f, 0.1f}});
   const GridGeometry g0 = fm.geometry();
   fm.addPoints({{10.02f, -7.98f, 0.0f}});
   const GridGeometry g1 = fm.geometry();
@@ -91,17 +95,20 @@ TEST(FloorMap, RefusesToGrowBeyondTheCellLimitAndStaysAsItWas) {
   Explorer ex;
   ASSERT_TRUE(ex.addScan(0, Pose2D(0.0, 0.0, 0.0), {{0.5f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}}));
   const std::vector<Eigen::Vector3f> far_points = {{2000.5f, 2000.0f, 0.0f}, {2001.0f, 2001.0f, 0.0f}};
-  EXPECT_THROW(ex.addScan(1, Pose2D(2000.0, 2000.0, 0.0), far_points), std::length_error) << "a scan 2.8 km from the other";
+  EXPECT_THROW(ex.addScan(1, Pose2D(2000.0, 2000.0, 0.0), far_points), std::length_error)
+      << "a scan 2.8 km from the other";
   EXPECT_FALSE(ex.hasScan(1));
   EXPECT_NO_THROW(fm.addPoints({{100.0f, 50.0f, 0.0f}})) << "a 100 m x 50 m grid is fine";
 }
 
 TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
-  FloorConfig cfg;  // min_obstacle_points = 2
+  FloorConfig cfg;             // min_obstacle_points = 2
   cfg.speckle_min_points = 2;  // no speckle removal here (SpeckleRemovalKeepsAThinLegAndClearsStrayPairs)
-  cfg.min_obstacle_scans = 0;  // per-scan evidence only (AnOverhangSeenOnlyAtGrazingAnglesIsAnObstacle: the sparse rule)
+  cfg.min_obstacle_scans =
+      0;  // per-scan evidence only (AnOverhangSeenOnlyAtGrazingAnglesIsAnObstacle: the sparse rule)
   FloorMap fm(cfg);
-  for (int scan = 0; scan < 5; ++scan) fm.addPoints({{2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});  // one stray point per scan
+  for (int scan = 0; scan < 5; ++scan)
+    fm.addPoints({{2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});  // one stray point per scan
   cv::Mat s = fm.states();
   EXPECT_EQ(s.at<uint8_t>(fm.geometry().cellOf(2.01, 2.01)), kUnknown);
   // With the sparse rule (default min_obstacle_scans 3): random stray points land in different
@@ -109,9 +116,11 @@ TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
   FloorConfig sparse;
   sparse.speckle_min_points = 2;
   FloorMap fs(sparse);
-  for (int scan = 0; scan < 5; ++scan) fs.addPoints({{1.01f + 0.2f * scan, 1.01f, 0.3f}, {2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});
+  for (int scan = 0; scan < 5; ++scan)
+    fs.addPoints({{1.01f + 0.2f * scan, 1.01f, 0.3f}, {2.01f, 2.01f, 0.3f}, {3.01f, 3.01f, 0.0f}});
   const cv::Mat ss = fs.states();
-  for (int scan = 0; scan < 5; ++scan) EXPECT_EQ(ss.at<uint8_t>(fs.geometry().cellOf(1.01 + 0.2 * scan, 1.01)), kUnknown);
+  for (int scan = 0; scan < 5; ++scan)
+    EXPECT_EQ(ss.at<uint8_t>(fs.geometry().cellOf(1.01 + 0.2 * scan, 1.01)), kUnknown);
   EXPECT_EQ(ss.at<uint8_t>(fs.geometry().cellOf(2.01, 2.01)), kObstacle);
   fm.addPoints({{2.01f, 2.01f, 0.3f}, {2.02f, 2.03f, 0.5f}});  // two in one scan
   s = fm.states();
@@ -126,16 +135,16 @@ TEST(FloorMap, ObstacleEvidenceCountsPerScan) {
 
 TEST(FloorMap, FillsNarrowGapsButNotTheFrontier) {
   cv::Mat s = cv::Mat::zeros(40, 60, CV_8U);
-  s(cv::Rect(0, 0, 60, 20)).setTo(kFloor);                       // floor below row 20, unknown above
+  s(cv::Rect(0, 0, 60, 20)).setTo(kFloor);                                    // floor below row 20, unknown above
   for (int c = 30; c < 60; c += 3) s(cv::Rect(c, 0, 1, 20)).setTo(kUnknown);  // 1-cell radial gaps
-  s(cv::Rect(5, 5, 6, 6)).setTo(kUnknown);                        // a 6-cell hole: wider than 2 r
-  s.at<uint8_t>(15, 31) = kObstacle;                              // an obstacle inside a gap stays
+  s(cv::Rect(5, 5, 6, 6)).setTo(kUnknown);                                    // a 6-cell hole: wider than 2 r
+  s.at<uint8_t>(15, 31) = kObstacle;                                          // an obstacle inside a gap stays
   cv::Mat filled = s.clone();
   fillFloorGaps(filled, 2.0);
   EXPECT_EQ(filled.at<uint8_t>(10, 30), kFloor);
   EXPECT_EQ(filled.at<uint8_t>(10, 57), kFloor);
   EXPECT_EQ(filled.at<uint8_t>(15, 31), kObstacle);
-  EXPECT_EQ(filled.at<uint8_t>(8, 8), kUnknown);  // centre of the wide hole
+  EXPECT_EQ(filled.at<uint8_t>(8, 8), kUnknown);                    // centre of the wide hole
   EXPECT_EQ(cv::countNonZero(filled(cv::Rect(0, 20, 60, 20))), 0);  // the frontier did not move
   cv::Mat off = s.clone();
   fillFloorGaps(off, 0.0);
@@ -181,7 +190,8 @@ TEST(Explorer, ExploresTheTableRoomFromSimulatedScansAndTerminates) {
     ASSERT_TRUE(test::polylineOnAccessible(r.geometry, r.accessible, r.path)) << "step " << step;
     for (size_t i = 1; i < r.path.size(); ++i) {
       ASSERT_TRUE(s.free.at<uint8_t>(s.geometry.cellOf(r.path[i].x(), r.path[i].y())));  // on the true floor
-      if (r.scan_at[i]) ex.addScan(index++, Pose2D(r.path[i].x(), r.path[i].y(), 0.0), test::simulateScan(s, r.path[i], 3.0));
+      if (r.scan_at[i])
+        ex.addScan(index++, Pose2D(r.path[i].x(), r.path[i].y(), 0.0), test::simulateScan(s, r.path[i], 3.0));
     }
     robot = r.target;
   }
@@ -214,7 +224,7 @@ TEST(Explorer, FollowsCorrectedScanPoses) {
     corrected[i] = truth[i];
   }
   const cv::Mat before = drifted.floorMap().states();
-  corrected[7] = Pose2D(50.0, 50.0, 0.0);  // not a scan of this explorer: ignored
+  corrected[7] = Pose2D(50.0, 50.0, 0.0);         // not a scan of this explorer: ignored
   EXPECT_EQ(drifted.updatePoses(corrected), 2u);  // scan 0 had no drift
   EXPECT_EQ(drifted.updatePoses(corrected), 0u);  // nothing moves twice
   EXPECT_EQ(drifted.scanCount(), 3u);
@@ -249,7 +259,8 @@ TEST(Explorer, BlacklistsATargetTheRobotNeverReaches) {
     ASSERT_TRUE(r.success) << r.message;
     complete = r.complete;
     if (!complete) {
-      for (const auto& b : ex.blacklisted()) EXPECT_GT((r.target - b.first).norm(), b.second) << "blacklisted target retried";
+      for (const auto& b : ex.blacklisted())
+        EXPECT_GT((r.target - b.first).norm(), b.second) << "blacklisted target retried";
       targets.push_back(r.target);
     } else {
       EXPECT_NE(r.complete_reason.find("blacklisted"), std::string::npos) << r.complete_reason;
@@ -490,7 +501,8 @@ TEST(Explorer, ExploresA10x8RoomFromRotatingScannerScans) {
     for (size_t i = 1; i < r.path.size(); ++i) {
       for (int k = 0; k <= 20; ++k) {
         const Eigen::Vector2d p = r.path[i - 1] + (r.path[i] - r.path[i - 1]) * (k / 20.0);
-        ASSERT_TRUE(w.discFree(p, 0.25, 0.6)) << "step " << steps << ": collision at (" << p.x() << ", " << p.y() << ")";
+        ASSERT_TRUE(w.discFree(p, 0.25, 0.6))
+            << "step " << steps << ": collision at (" << p.x() << ", " << p.y() << ")";
       }
       if (r.scan_at[i]) {
         ex.addScan(index, Pose2D(r.path[i].x(), r.path[i].y(), 0.0), scan(r.path[i]));

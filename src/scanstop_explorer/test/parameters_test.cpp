@@ -3,11 +3,11 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <unistd.h>
 #include <cstdlib>
 #include <set>
 #include <string>
 #include <type_traits>
-#include <unistd.h>
 
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
@@ -77,10 +77,11 @@ TEST(ExplorerParameters, TheMissionsExplorerYamlIsReadAsTheNodeReadsIt) {
 
 TEST(ExplorerParameters, BadFilesAreNamedWithTheParameter) {
   EXPECT_NE(errorOf("k_r_m: 2.0\nkr_m: 1.0\n").find("unknown explorer parameter 'kr_m'"), std::string::npos);
-  EXPECT_NE(errorOf("min_obstacle_scans: 2.5\n").find("min_obstacle_scans = '2.5' is not an integer"), std::string::npos);
+  EXPECT_NE(errorOf("min_obstacle_scans: 2.5\n").find("min_obstacle_scans = '2.5' is not an integer"),
+            std::string::npos);
   EXPECT_NE(errorOf("d_max_m: far\n").find("d_max_m = 'far' is not a number"), std::string::npos);
   EXPECT_NE(errorOf("ignore_wall_base_frontier: maybe\n").find("is not true or false"), std::string::npos);
-  EXPECT_NE(errorOf("d_max_m: -1\n").find("d_max_m"), std::string::npos);            // out of range
+  EXPECT_NE(errorOf("d_max_m: -1\n").find("d_max_m"), std::string::npos);  // out of range
   EXPECT_NE(errorOf("inflation_margin_m: 3\n").find("inflation_margin_m"), std::string::npos);
   EXPECT_NE(errorOf("- 1\n- 2\n").find("expected a map"), std::string::npos);
   EXPECT_NE(errorOf("a: [\n").find("not a YAML file"), std::string::npos);

@@ -2,21 +2,21 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <opencv2/imgcodecs.hpp>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
-#include <algorithm>
-#include <cmath>
-#include <sstream>
 
-#include "scenes.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
+#include "scenes.h"
 
 using namespace scanstop;
 using namespace scanstop::explorer;
@@ -61,8 +61,9 @@ TEST(PlanStep, PlansOnAMapDirectoryAndPrintsJson) {
   }
   const ToolRun r = run(std::string(PLAN_STEP_EXE) + " " + dir + "/map " + dir + "/out --json --pose 1.0,1.0,0.0");
   ASSERT_EQ(r.status, 0) << r.out;
-  for (const char* key : {"\"success\": true", "\"complete\": false", "\"path\": [{\"x\": 1, \"y\": 1, \"scan\": false, \"clearance_m\": ",
-                          "\"target\"", "\"score\"", "\"coverage\""})
+  for (const char* key : {"\"success\": true", "\"complete\": false",
+                          "\"path\": [{\"x\": 1, \"y\": 1, \"scan\": false, \"clearance_m\": ", "\"target\"",
+                          "\"score\"", "\"coverage\""})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << " missing in " << r.out;
   for (const char* img : {"floor", "distance", "cost", "knowledge", "evaluation"})
     EXPECT_FALSE(cv::imread(dir + "/out/" + img + ".png").empty()) << img;
@@ -104,7 +105,9 @@ void edit(const std::string& path, const std::string& from, const std::string& t
   ASSERT_NE(at, std::string::npos) << from << " not in " << text;
   writeFileAtomic(path, text.replace(at, from.size(), to));
 }
-bool exists(const std::string& path) { return std::ifstream(path).good() || std::system(("test -e " + path).c_str()) == 0; }
+bool exists(const std::string& path) {
+  return std::ifstream(path).good() || std::system(("test -e " + path).c_str()) == 0;
+}
 }  // namespace
 
 namespace {
@@ -178,7 +181,8 @@ TEST(PlanStep, RefusesAMapWithAMissingScanOrANaNPoseNamingItUnlessSkipBad) {
   ASSERT_EQ(std::remove((map2 + "/poses_journal.csv").c_str()), 0);
   r = run(std::string(PLAN_STEP_EXE) + " " + map2 + " " + dir + "/out2");
   EXPECT_EQ(r.status, 2) << r.out;
-  EXPECT_NE(r.out.find(map2 + "/poses.csv: line 3: column 4 ('nan') is not a finite number (1 problem"), std::string::npos)
+  EXPECT_NE(r.out.find(map2 + "/poses.csv: line 3: column 4 ('nan') is not a finite number (1 problem"),
+            std::string::npos)
       << r.out;
   EXPECT_EQ(std::system(("rm -rf " + dir).c_str()), 0);
 }
@@ -203,7 +207,8 @@ TEST(PlanStep, RefusesAFarPoseBeforeAllocatingAnything) {
   EXPECT_FALSE(exists(dir + "/out2"));
   r = run(std::string(PLAN_STEP_EXE) + " " + dir + "/map " + dir + "/out3 --pose 20000,0,0");
   EXPECT_EQ(r.status, 2) << r.out;
-  EXPECT_NE(r.out.find("--pose 20000,0,0: value 1 ('20000') is not a number in [-10000, 10000]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--pose 20000,0,0: value 1 ('20000') is not a number in [-10000, 10000]"), std::string::npos)
+      << r.out;
   EXPECT_EQ(std::system(("rm -rf " + dir).c_str()), 0);
 }
 

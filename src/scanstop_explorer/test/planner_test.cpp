@@ -4,17 +4,18 @@
 #include <cstdio>
 #include <tuple>
 
-#include "scenes.h"
 #include "scanstop_common/error.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/planner.h"
 #include "scanstop_explorer/skeleton.h"
+#include "scenes.h"
 
 using namespace scanstop::explorer;
 using scanstop::Pose2D;
 
 namespace {
-PlanInput inputFor(const test::Scene& s, const cv::Mat& states, const std::vector<Eigen::Vector2d>& scans, const Pose2D& robot) {
+PlanInput inputFor(const test::Scene& s, const cv::Mat& states, const std::vector<Eigen::Vector2d>& scans,
+                   const Pose2D& robot) {
   PlanInput in;
   in.states = states;
   in.geometry = s.geometry;
@@ -225,14 +226,15 @@ TEST(Plan, DonutFarSideIsReachedAroundTheHole) {
   for (int r = 0; r < states.rows; ++r)
     for (int c = 0; c < states.cols; ++c) {
       const Eigen::Vector2d p = s.geometry.center({c, r});
-      if (states.at<uint8_t>(r, c) == kObstacle && p.y() > 5.0 && std::abs(p.x() - 3.0) < 0.5) states.at<uint8_t>(r, c) = kUnknown;
+      if (states.at<uint8_t>(r, c) == kObstacle && p.y() > 5.0 && std::abs(p.x() - 3.0) < 0.5)
+        states.at<uint8_t>(r, c) = kUnknown;
     }
   const PlanResult r = planStep(inputFor(s, states, scans, Pose2D(3.0, 0.6, 0.0)), cfg);
   expectValidPath(r, cfg, "donut");
   // Every accessible cell of the ring is reached, also those no anchor sees.
   EXPECT_EQ(cv::countNonZero(r.cost_map.predecessor >= 0), cv::countNonZero(r.accessible));
   EXPECT_GT(r.target.y(), 4.5);  // the unscanned top of the ring
-  EXPECT_GE(r.path.size(), 4u);   // around the hole in several legs
+  EXPECT_GE(r.path.size(), 4u);  // around the hole in several legs
 }
 
 TEST(Plan, RobotOffTheAccessibleFloorIsJoinedOrRejected) {
@@ -301,8 +303,8 @@ TEST(Termination, FiresOnAFullySeenRoomAndNotBefore) {
     // Not before: while any free cell of the world is still unseen, the step is not complete.
     const int unseen = cv::countNonZero(s.free & (states != kFloor));
     if (complete) {
-      EXPECT_EQ(unseen, 0) << "complete with " << unseen << " unseen cells after " << scans.size() << " scans: "
-                           << r.complete_reason;
+      EXPECT_EQ(unseen, 0) << "complete with " << unseen << " unseen cells after " << scans.size()
+                           << " scans: " << r.complete_reason;
       EXPECT_EQ(r.open_cells, 0u);
       EXPECT_TRUE(r.path.empty());
       EXPECT_NE(r.complete_reason.find("knowledge_threshold"), std::string::npos);
@@ -341,8 +343,8 @@ TEST(Termination, FrontierIgnoresEnclosedPocketsAndWallBases) {
   cv::Mat pocket(20, 20, CV_8U, cv::Scalar(kFloor));
   pocket(cv::Rect(5, 5, 2, 2)).setTo(kUnknown);
   EXPECT_EQ(cv::countNonZero(frontierCells(pocket)), 4);
-  EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 2.0)), 4);  // as large as the bound: kept
-  EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 3.0)), 0);  // smaller both ways: no frontier
+  EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 2.0)), 4);        // as large as the bound: kept
+  EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 3.0)), 0);        // smaller both ways: no frontier
   EXPECT_EQ(cv::countNonZero(frontierCells(pocket, 0.0, true)), 4);  // no obstacle near it
   // Floor in columns 0-9, a wall in column 10, unknown space behind it (columns 11-19). The wall has
   // a 5-cell opening in rows 5-9 and a floor cell in row 15 (a point at its base); both border the
@@ -386,10 +388,9 @@ TEST(TargetClearance, MovesToTheNearestAllowedCellFarEnoughFromAWall) {
 TEST(Plan, TargetClearanceKeepsTheTargetOffTheWalls) {
   PlannerConfig cfg;
   int moved = 0;
-  for (const auto& [name, scene, robot] :
-       {std::make_tuple("corridor", test::corridor(), Eigen::Vector2d(0.5, 0.6)),
-        std::make_tuple("two rooms", test::twoRooms(), Eigen::Vector2d(1.0, 1.0)),
-        std::make_tuple("L", test::lShape(), Eigen::Vector2d(4.4, 0.75))}) {
+  for (const auto& [name, scene, robot] : {std::make_tuple("corridor", test::corridor(), Eigen::Vector2d(0.5, 0.6)),
+                                           std::make_tuple("two rooms", test::twoRooms(), Eigen::Vector2d(1.0, 1.0)),
+                                           std::make_tuple("L", test::lShape(), Eigen::Vector2d(4.4, 0.75))}) {
     const cv::Mat states = test::seenStates(scene, {robot}, 2.5);
     const PlanInput in = inputFor(scene, states, {robot}, Pose2D(robot.x(), robot.y(), 0.0));
     cfg.target_clearance_m = 0.0;

@@ -115,7 +115,8 @@ inline std::vector<Eigen::Vector3f> simulateScan(const Scene& s, const Eigen::Ve
   for (int r = 0; r < s.free.rows; ++r)
     for (int c = 0; c < s.free.cols; ++c) {
       const Eigen::Vector2d q = s.geometry.center({c, r});
-      if (vis.at<uint8_t>(r, c)) pts.emplace_back(q.x(), q.y(), 0.0f);
+      if (vis.at<uint8_t>(r, c))
+        pts.emplace_back(q.x(), q.y(), 0.0f);
       else if (near.at<uint8_t>(r, c) && !s.free.at<uint8_t>(r, c)) {
         pts.emplace_back(q.x(), q.y(), 0.2f);
         pts.emplace_back(q.x(), q.y(), 0.4f);
@@ -138,8 +139,8 @@ inline cv::Mat seenStates(const Scene& s, const std::vector<Eigen::Vector2d>& po
 }
 
 /// Checks a polyline densely (every 1/20 cell) against the accessible mask.
-inline bool polylineOnAccessible(const GridGeometry& g, const cv::Mat& accessible, const std::vector<Eigen::Vector2d>& path,
-                                 size_t first_segment = 0) {
+inline bool polylineOnAccessible(const GridGeometry& g, const cv::Mat& accessible,
+                                 const std::vector<Eigen::Vector2d>& path, size_t first_segment = 0) {
   for (size_t i = first_segment + 1; i < path.size(); ++i) {
     const Eigen::Vector2d a = g.toGrid(path[i - 1]), b = g.toGrid(path[i]);
     const int n = static_cast<int>(std::ceil((b - a).norm() * 20)) + 1;

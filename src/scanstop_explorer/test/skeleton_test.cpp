@@ -2,9 +2,9 @@
 
 #include <random>
 
-#include "scenes.h"
 #include "scanstop_explorer/distance_transform.h"
 #include "scanstop_explorer/skeleton.h"
+#include "scenes.h"
 
 using namespace scanstop::explorer;
 
@@ -36,15 +36,15 @@ TEST(SkeletonTables, KnownConfigurations) {
   const auto& h = homotopyTable();
   const auto& p = pruningTable();
   const auto& s = specialPointTable();
-  EXPECT_TRUE(h[0]);             // isolated pixel: removing it deletes a component
-  EXPECT_TRUE(h[0xFF]);          // interior pixel: removing it makes a hole
-  EXPECT_TRUE(h[NE]);            // only a diagonal neighbour: not 4-connected, still a component
-  EXPECT_FALSE(h[N]);            // end of a line
-  EXPECT_TRUE(h[N | S]);         // middle of a line
-  EXPECT_TRUE(h[N | E]);         // staircase corner of a 4-connected line
-  EXPECT_FALSE(h[N | NE | E]);   // bump on a corner: redundant
-  EXPECT_TRUE(h[N | E | S]);     // T junction
-  EXPECT_FALSE(h[E | NE | N | NW | W]);  // edge of a half plane
+  EXPECT_TRUE(h[0]);                          // isolated pixel: removing it deletes a component
+  EXPECT_TRUE(h[0xFF]);                       // interior pixel: removing it makes a hole
+  EXPECT_TRUE(h[NE]);                         // only a diagonal neighbour: not 4-connected, still a component
+  EXPECT_FALSE(h[N]);                         // end of a line
+  EXPECT_TRUE(h[N | S]);                      // middle of a line
+  EXPECT_TRUE(h[N | E]);                      // staircase corner of a 4-connected line
+  EXPECT_FALSE(h[N | NE | E]);                // bump on a corner: redundant
+  EXPECT_TRUE(h[N | E | S]);                  // T junction
+  EXPECT_FALSE(h[E | NE | N | NW | W]);       // edge of a half plane
   EXPECT_TRUE(h[NE | N | NW | SW | S | SE]);  // between two walls (E and W background)
 
   EXPECT_TRUE(p[N]);
@@ -55,12 +55,12 @@ TEST(SkeletonTables, KnownConfigurations) {
   EXPECT_FALSE(p[N | NE | E]);  // two 4-neighbours: not a free end
   EXPECT_FALSE(p[E | NE | N | NW | W]);
 
-  EXPECT_TRUE(s[0]);             // isolated
-  EXPECT_TRUE(s[N]);             // end
-  EXPECT_FALSE(s[N | S]);        // line
-  EXPECT_FALSE(s[N | E]);        // corner
-  EXPECT_TRUE(s[N | E | S]);     // junction
-  EXPECT_TRUE(s[N | E | S | W]); // crossing
+  EXPECT_TRUE(s[0]);              // isolated
+  EXPECT_TRUE(s[N]);              // end
+  EXPECT_FALSE(s[N | S]);         // line
+  EXPECT_FALSE(s[N | E]);         // corner
+  EXPECT_TRUE(s[N | E | S]);      // junction
+  EXPECT_TRUE(s[N | E | S | W]);  // crossing
 }
 
 TEST(SkeletonTables, InvariantUnderRotationAndMirror) {
@@ -122,8 +122,11 @@ struct Named {
   int holes;
 };
 std::vector<Named> scenes() {
-  return {{"corridor", test::corridor(), 1, 0}, {"two rooms", test::twoRooms(), 1, 0}, {"L", test::lShape(), 1, 0},
-          {"donut", test::donut(), 1, 1},       {"table", test::tableRoom(), 1, 4}};
+  return {{"corridor", test::corridor(), 1, 0},
+          {"two rooms", test::twoRooms(), 1, 0},
+          {"L", test::lShape(), 1, 0},
+          {"donut", test::donut(), 1, 1},
+          {"table", test::tableRoom(), 1, 4}};
 }
 cv::Mat accessibleOf(const test::Scene& s, cv::Mat* sq = nullptr) {
   const cv::Mat d = squaredDistanceTransform(floorMask(test::idealStates(s)));

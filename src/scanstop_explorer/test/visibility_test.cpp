@@ -2,10 +2,10 @@
 // and 3): RayCaster, visibilityKnowledgeMap, gainMap and the planner's "visibility" / "gain" modes.
 #include <gtest/gtest.h>
 
-#include "scenes.h"
 #include "scanstop_common/error.h"
 #include "scanstop_explorer/planner.h"
 #include "scanstop_explorer/visibility.h"
+#include "scenes.h"
 
 using namespace scanstop::explorer;
 using scanstop::Pose2D;

@@ -28,9 +28,7 @@ using namespace scanstop::mesher;
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 void printRow(const std::string& name, double seconds, const TriangleMesh& mesh, const TriangleMesh* reference) {
   const MeshTopology t = analyzeTopology(mesh);
@@ -45,10 +43,14 @@ int bunny(int argc, char** argv) {
   int repeat = 5;
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--ply") ply = argv[i + 1];
-    else if (a == "--points-out") points_out = argv[i + 1];
-    else if (a == "--repeat") repeat = std::max(1, std::atoi(argv[i + 1]));
-    else throw ConfigError("unknown option " + a);
+    if (a == "--ply")
+      ply = argv[i + 1];
+    else if (a == "--points-out")
+      points_out = argv[i + 1];
+    else if (a == "--repeat")
+      repeat = std::max(1, std::atoi(argv[i + 1]));
+    else
+      throw ConfigError("unknown option " + a);
   }
   const TriangleMesh ref = readPly(ply);
   const std::vector<Eigen::Vector3f> normals = vertexNormalsFromFaces(ref);
@@ -124,12 +126,18 @@ int meshMap(int argc, char** argv) {
   std::string out;
   for (int i = 3; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--voxel") config.voxel_m = std::stod(argv[i + 1]);
-    else if (a == "--out") out = argv[i + 1];
-    else if (a == "--smooth") config.smooth = std::string(argv[i + 1]) == "1";
-    else if (a == "--normal-radius") config.normal_radius_m = std::stod(argv[i + 1]);
-    else if (a == "--radii") config.radii_m = parseRadii(argv[i + 1]);
-    else throw ConfigError("unknown option " + a);
+    if (a == "--voxel")
+      config.voxel_m = std::stod(argv[i + 1]);
+    else if (a == "--out")
+      out = argv[i + 1];
+    else if (a == "--smooth")
+      config.smooth = std::string(argv[i + 1]) == "1";
+    else if (a == "--normal-radius")
+      config.normal_radius_m = std::stod(argv[i + 1]);
+    else if (a == "--radii")
+      config.radii_m = parseRadii(argv[i + 1]);
+    else
+      throw ConfigError("unknown option " + a);
   }
   const double t0 = now();
   const ScanPoints pts = loadMapDirectory(argv[2]);

@@ -2,11 +2,11 @@
 
 #include "scanstop_mesher/mesh_analysis.h"
 
+#include <omp.h>
 #include <algorithm>
 #include <chrono>
-#include <exception>
-#include <omp.h>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 
@@ -459,7 +459,8 @@ bool BallPivoting::findSeed() {
   std::vector<std::pair<double, int>>& near = seed_near_;
   for (; seed_cursor_ < grid_->numCells(); ++seed_cursor_) {
     int tries = 0;
-    for (uint32_t k = grid_->cellBegin(seed_cursor_); k < grid_->cellBegin(seed_cursor_ + 1) && tries < kTriesPerCell; ++k) {
+    for (uint32_t k = grid_->cellBegin(seed_cursor_); k < grid_->cellBegin(seed_cursor_ + 1) && tries < kTriesPerCell;
+         ++k) {
       const int v = static_cast<int>(order[k]);
       if (!mine(v) || used_[v] || (seam_band_ > 0.0 && !nearCut(v))) continue;
       ++tries;
@@ -528,8 +529,7 @@ void BallPivoting::runPass(double radius_m, bool seam) {
   while (findSeed());
   stats_.triangles = faces_.size();
   stats_.triangles_per_radius.push_back(faces_.size());
-  stats_.seconds_per_radius.push_back(
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  stats_.seconds_per_radius.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
 int BallPivoting::automaticRegions(size_t points) {
@@ -583,7 +583,8 @@ void BallPivoting::runRegions(const std::vector<double>& radii_m, int regions) {
   region_store_.assign(n, 255);
   for (size_t i = 0; i < n; ++i)
     if (p_[i].allFinite())
-      region_store_[i] = static_cast<uint8_t>(std::upper_bound(cuts_.begin(), cuts_.end(), p_[i][cut_axis_]) - cuts_.begin());
+      region_store_[i] =
+          static_cast<uint8_t>(std::upper_bound(cuts_.begin(), cuts_.end(), p_[i][cut_axis_]) - cuts_.begin());
   region_ = region_store_.data();
 
   std::vector<std::unique_ptr<BallPivoting>> workers;
@@ -727,7 +728,8 @@ std::string BallPivoting::checkFront() const {
   for (size_t id = 0; id < edges_.size(); ++id) {
     const Edge& E = edges_[id];
     if (E.state == kRemoved) continue;
-    const std::string name = "edge " + std::to_string(id) + " (" + std::to_string(E.a) + "->" + std::to_string(E.b) + ")";
+    const std::string name =
+        "edge " + std::to_string(id) + " (" + std::to_string(E.a) + "->" + std::to_string(E.b) + ")";
     if (E.next < 0 || E.prev < 0 || edges_[E.next].state == kRemoved || edges_[E.prev].state == kRemoved)
       return name + ": linked to a removed edge";
     if (edges_[E.next].prev != static_cast<int>(id) || edges_[E.prev].next != static_cast<int>(id))

@@ -4,8 +4,8 @@
 #include <sys/stat.h>
 
 #include <chrono>
-#include <stdexcept>
 #include <sstream>
+#include <stdexcept>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/config.h"
@@ -113,7 +113,8 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   build_srv_ = nh.advertiseService("mesher/build_mesh", &BpaMesherNode::onBuildMesh, this);
   if (!c.load_mesh.empty()) {
     reloadMesh();  // a file that exists but cannot be read stops the node
-    if (mesh_mtime_ns_ < 0) ROS_WARN("bpa_mesher_node: %s does not exist (yet); showing it once it does", c.load_mesh.c_str());
+    if (mesh_mtime_ns_ < 0)
+      ROS_WARN("bpa_mesher_node: %s does not exist (yet); showing it once it does", c.load_mesh.c_str());
   }
   if (c.publish_map) {
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("slam/map_cloud", 1, true);

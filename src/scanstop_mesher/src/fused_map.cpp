@@ -1,6 +1,5 @@
 #include "scanstop_mesher/fused_map.h"
 
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -164,9 +163,9 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
       const float w = weight.getValue(c);
       if (w == 0.0f && !weight.probeConstLeaf(c) && ++stats_.leaves_created > max_leaves) {
         std::ostringstream o;
-        o << "the fused map's grids passed max_grid_mb = " << config_.max_grid_mb << " MB ("
-          << stats_.leaves_created << " leaf nodes of 8^3 voxels) after " << used << " of scan "
-          << stats_.scans + 1 << "'s " << points.size() << " readings: voxel_m = " << config_.voxel_m
+        o << "the fused map's grids passed max_grid_mb = " << config_.max_grid_mb << " MB (" << stats_.leaves_created
+          << " leaf nodes of 8^3 voxels) after " << used << " of scan " << stats_.scans + 1 << "'s " << points.size()
+          << " readings: voxel_m = " << config_.voxel_m
           << " m is too fine for the mapped space; use a larger voxel (default 0.02 m) or raise max_grid_mb";
         throw ConfigError(o.str());
       }

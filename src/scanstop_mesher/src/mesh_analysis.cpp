@@ -297,13 +297,14 @@ SurfaceDistance distanceToSurface(const std::vector<Eigen::Vector3f>& samples, c
       for (int z = std::max(0, cz - ring); z <= std::min(dims[2] - 1, cz + ring); ++z)
         for (int y = std::max(0, cy - ring); y <= std::min(dims[1] - 1, cy + ring); ++y)
           for (int x = std::max(0, cx - ring); x <= std::min(dims[0] - 1, cx + ring); ++x) {
-            const bool shell = ring == 1 || std::abs(z - cz) == ring || std::abs(y - cy) == ring || std::abs(x - cx) == ring;
+            const bool shell =
+                ring == 1 || std::abs(z - cz) == ring || std::abs(y - cy) == ring || std::abs(x - cx) == ring;
             if (!shell) continue;
             for (int fi : cells[(static_cast<size_t>(z) * dims[1] + y) * dims[0] + x]) {
               const auto& f = reference.faces[fi];
-              const Eigen::Vector3d q = closestOnTriangle(p, reference.vertices[f[0]].cast<double>(),
-                                                          reference.vertices[f[1]].cast<double>(),
-                                                          reference.vertices[f[2]].cast<double>());
+              const Eigen::Vector3d q =
+                  closestOnTriangle(p, reference.vertices[f[0]].cast<double>(), reference.vertices[f[1]].cast<double>(),
+                                    reference.vertices[f[2]].cast<double>());
               best = std::min(best, (q - p).squaredNorm());
             }
           }
@@ -333,7 +334,8 @@ std::vector<Eigen::Vector3f> sampleFaces(const TriangleMesh& mesh) {
 std::vector<Eigen::Vector3f> vertexNormalsFromFaces(const TriangleMesh& mesh) {
   std::vector<Eigen::Vector3f> n(mesh.vertices.size(), Eigen::Vector3f::Zero());
   for (const auto& f : mesh.faces) {
-    const Eigen::Vector3f a = (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]);
+    const Eigen::Vector3f a =
+        (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]);
     for (int k = 0; k < 3; ++k) n[f[k]] += a;
   }
   for (auto& v : n)

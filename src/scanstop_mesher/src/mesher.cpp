@@ -1,12 +1,12 @@
 #include "scanstop_mesher/mesher.h"
 
-#include <Eigen/Eigenvalues>
-#include <climits>
-#include <cstdlib>
 #include <sys/stat.h>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -111,7 +111,8 @@ std::string realDirectory(const std::string& dir, const std::string& what) {
 std::string resolveOutputPath(const std::string& path, const std::string& allowed_dir) {
   if (path.empty()) throw ConfigError("output_path is empty");
   if (allowed_dir.empty())
-    throw ConfigError("output_path '" + path + "' refused: no output directory is allowed (set parameter 'output_dir')");
+    throw ConfigError("output_path '" + path +
+                      "' refused: no output directory is allowed (set parameter 'output_dir')");
   const std::string ext = fileExtension(path);
   if (ext != "stl" && ext != "ply") throw ConfigError("output_path '" + path + "' must end in .stl or .ply");
   const std::string allowed = realDirectory(allowed_dir, "the output directory");
@@ -226,7 +227,8 @@ double meanSpacing(const std::vector<Eigen::Vector3f>& points, size_t max_sample
 }
 
 std::vector<double> automaticRadii(double spacing_m) {
-  if (!(spacing_m > 0.0)) throw ConfigError("cannot choose radii: the mean point spacing is " + std::to_string(spacing_m));
+  if (!(spacing_m > 0.0))
+    throw ConfigError("cannot choose radii: the mean point spacing is " + std::to_string(spacing_m));
   // A ball touching three neighbours needs at least about their spacing; the larger radii close
   // gaps where the sampling is sparser (thesis 7.4 uses three radii). Larger steps (x2, x4) cost
   // much more on dense noisy maps (the work per pivot grows with r^2) and gave fewer triangles on
@@ -274,7 +276,7 @@ size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors, bool
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
       es.computeDirect(cov);
       const Eigen::Vector3d ev = es.eigenvalues();  // increasing
-      if (!(ev[1] > 1e-3 * ev[2])) continue;         // a line (e.g. one scan row): no plane to take
+      if (!(ev[1] > 1e-3 * ev[2])) continue;        // a line (e.g. one scan row): no plane to take
       Eigen::Vector3d n = es.eigenvectors().col(0);
       const Eigen::Vector3d to_scanner = pts.origins[pts.view[i]].cast<double>() - pi;
       const double c = n.dot(to_scanner) / std::max(to_scanner.norm(), 1e-12);
@@ -324,8 +326,8 @@ MesherResult buildMesh(const ScanPoints& input, const MesherConfig& config) {
   BallPivoting bpa(pts.points, pts.normals);
   res.points = bpa.stats().points;
   if (res.points < 3)
-    throw std::runtime_error("nothing to mesh: " + std::to_string(res.points) + " of " +
-                             std::to_string(input.size()) + " points have a usable normal");
+    throw std::runtime_error("nothing to mesh: " + std::to_string(res.points) + " of " + std::to_string(input.size()) +
+                             " points have a usable normal");
   bpa.run(res.radii_m);  // large maps: slabs on OpenMP threads, seams stitched
   res.mesh = bpa.mesh();
   res.stats = bpa.stats();
@@ -347,8 +349,7 @@ std::vector<double> parseRadii(const std::string& text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != item.size())
-      throw ConfigError("radii: '" + item + "' in '" + text + "' is not a number");
+    if (used == 0 || used != item.size()) throw ConfigError("radii: '" + item + "' in '" + text + "' is not a number");
     radii.push_back(v);
   }
   if (radii.empty()) throw ConfigError("radii: empty list '" + text + "'");

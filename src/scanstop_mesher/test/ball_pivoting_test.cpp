@@ -90,7 +90,8 @@ size_t misorientedFaces(const TriangleMesh& m) {
 double signedVolume(const TriangleMesh& m) {
   double v = 0;
   for (const auto& f : m.faces)
-    v += m.vertices[f[0]].cast<double>().dot(m.vertices[f[1]].cast<double>().cross(m.vertices[f[2]].cast<double>())) / 6.0;
+    v += m.vertices[f[0]].cast<double>().dot(m.vertices[f[1]].cast<double>().cross(m.vertices[f[2]].cast<double>())) /
+         6.0;
   return v;
 }
 
@@ -189,8 +190,10 @@ TEST(BallPivoting, TwoNearbyParallelPlanesStaySeparate) {
     const float z0 = m.vertices[f[0]].z(), z1 = m.vertices[f[1]].z(), z2 = m.vertices[f[2]].z();
     ASSERT_TRUE(z0 == z1 && z1 == z2) << "face " << i << " bridges the planes";
     (m.faceNormal(i).z() > 0.99f ? up : down)++;
-    if (z0 > 0.01f) EXPECT_GT(m.faceNormal(i).z(), 0.99f);
-    else EXPECT_LT(m.faceNormal(i).z(), -0.99f);
+    if (z0 > 0.01f)
+      EXPECT_GT(m.faceNormal(i).z(), 0.99f);
+    else
+      EXPECT_LT(m.faceNormal(i).z(), -0.99f);
   }
   EXPECT_GT(up, 2800u);
   EXPECT_GT(down, 2800u);
@@ -339,9 +342,8 @@ TEST(BallPivoting, StanfordBunny) {
   std::cout << "bunny: " << m.faces.size() << " triangles in " << s << " s, per radius";
   for (size_t n : bpa.stats().triangles_per_radius) std::cout << " " << n;
   std::cout << "; glue " << bpa.stats().glue[0] << " " << bpa.stats().glue[1] << " " << bpa.stats().glue[2] << " "
-            << bpa.stats().glue[3] << ", refused " << bpa.stats().refused_interior << "+"
-            << bpa.stats().refused_edge << ", pinches " << bpa.stats().pinches << ", dropped "
-            << bpa.stats().dropped_triangles << ", seeds "
+            << bpa.stats().glue[3] << ", refused " << bpa.stats().refused_interior << "+" << bpa.stats().refused_edge
+            << ", pinches " << bpa.stats().pinches << ", dropped " << bpa.stats().dropped_triangles << ", seeds "
             << bpa.stats().seeds << std::endl;
   EXPECT_EQ(bpa.checkFront(), "");
   EXPECT_GE(m.faces.size(), static_cast<size_t>(std::ceil(0.95 * 69451)));

@@ -77,7 +77,8 @@ TEST(BpaMesherNode, BuildsMeshesOfTheMapAndOfFilesAndReportsErrors) {
   });
   auto s3 = nh.subscribe<sensor_msgs::PointCloud2>("viewer/slam/map_cloud", 1, [&](const auto& m) { map_cloud = *m; });
   auto s4 = nh.subscribe<nav_msgs::Path>("viewer/slam/path", 1, [&](const auto& m) { path = *m; });
-  auto s5 = nh.subscribe<geometry_msgs::PoseArray>("viewer/mesher/scan_poses", 1, [&](const auto& m) { scan_poses = *m; });
+  auto s5 =
+      nh.subscribe<geometry_msgs::PoseArray>("viewer/mesher/scan_poses", 1, [&](const auto& m) { scan_poses = *m; });
 
   // The viewer shows the saved mesh right away.
   ASSERT_TRUE(spinUntil([&] { return viewer_got; }, 20.0));

@@ -66,8 +66,9 @@ TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
       worst_at = v;
     }
   }
-  std::printf("marching cubes: %zu of %zu vertices more than 2 cm off the room; the worst %.1f mm at (%.2f, %.2f, %.2f)\n",
-              off, mc.vertices.size(), 1e3 * worst, worst_at.x(), worst_at.y(), worst_at.z());
+  std::printf(
+      "marching cubes: %zu of %zu vertices more than 2 cm off the room; the worst %.1f mm at (%.2f, %.2f, %.2f)\n", off,
+      mc.vertices.size(), 1e3 * worst, worst_at.x(), worst_at.y(), worst_at.z());
   // Only at the box's convex edges (TSDF rounds them: beams passing the edge see through its cells).
   EXPECT_LT(off, mc.vertices.size() / 1000);
   EXPECT_LT(worst, 0.03f);

@@ -26,8 +26,7 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 /// Readings from `origin` of the wall x = wall_x at the targets (y, z) of a grid over
 /// [y0, y1] x [z0, z1] with the given spacing, each range perturbed by Gaussian noise of sigma [m].
 std::vector<Eigen::Vector3f> scanWall(const Eigen::Vector3f& origin, double wall_x, double y0, double y1, double z0,
-                                      double z1, double spacing, double sigma, std::mt19937& rng,
-                                      double jitter = 0.0) {
+                                      double z1, double spacing, double sigma, std::mt19937& rng, double jitter = 0.0) {
   std::normal_distribution<double> noise(0.0, 1.0);
   std::uniform_real_distribution<double> shift(0.0, jitter);
   const double sy = shift(rng), sz = shift(rng);
@@ -182,10 +181,10 @@ TEST(FusedMap, PlaneFromTwentyNoisyScansIsWithinAMillimetre) {
   }
   const double n = static_cast<double>(sp.size());
   const double rms = std::sqrt(sum_sq / n);
-  std::printf("plane: %zu surface points, signed mean %.3f mm, mean |d| %.3f mm, RMS %.3f mm, max %.3f mm\n",
-              sp.size(), 1e3 * sum / n, 1e3 * sum_abs / n, 1e3 * rms, 1e3 * max_abs);
-  EXPECT_LT(rms, 0.001);                  // the target: within 1 mm (RMS)
-  EXPECT_LT(std::abs(sum / n), 0.0003);   // no bias
+  std::printf("plane: %zu surface points, signed mean %.3f mm, mean |d| %.3f mm, RMS %.3f mm, max %.3f mm\n", sp.size(),
+              1e3 * sum / n, 1e3 * sum_abs / n, 1e3 * rms, 1e3 * max_abs);
+  EXPECT_LT(rms, 0.001);                 // the target: within 1 mm (RMS)
+  EXPECT_LT(std::abs(sum / n), 0.0003);  // no bias
   EXPECT_LT(max_abs, 0.006);
   EXPECT_LT(bad_normals, sp.size() / 100);
   // One noisy scan alone is far worse: the averaging is what gets below the millimetre.
@@ -267,8 +266,8 @@ TEST(FusedMap, MarchingCubesOfASphereIsClosedManifoldAndAccurate) {
     max_err = std::max(max_err, e);
     sum_err += e;
   }
-  std::printf("sphere: vertex distance to the sphere mean %.3f mm, max %.3f mm\n",
-              1e3 * sum_err / mesh.vertices.size(), 1e3 * max_err);
+  std::printf("sphere: vertex distance to the sphere mean %.3f mm, max %.3f mm\n", 1e3 * sum_err / mesh.vertices.size(),
+              1e3 * max_err);
   EXPECT_LT(max_err, 0.2 * config.voxel_m);
   size_t inward = 0, bad_normals = 0;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
@@ -336,8 +335,9 @@ TEST(FusedMap, SplatClosesTheGapsBetweenSparseBeams) {
     splatted.integrate(scan, o);
   }
   const MeshTopology t0 = analyzeTopology(sparse.extractMesh()), t1 = analyzeTopology(splatted.extractMesh());
-  std::printf("sparse beams: splat 0: %zu faces, %zu components; splat 1: %zu faces, %zu components, %zu boundary loops\n",
-              t0.faces, t0.components, t1.faces, t1.components, t1.boundary_loops);
+  std::printf(
+      "sparse beams: splat 0: %zu faces, %zu components; splat 1: %zu faces, %zu components, %zu boundary loops\n",
+      t0.faces, t0.components, t1.faces, t1.components, t1.boundary_loops);
   EXPECT_LT(t0.faces, t1.faces / 2);
   EXPECT_EQ(t1.components, 1u);
   EXPECT_EQ(t1.boundary_loops, 1u);

@@ -47,8 +47,8 @@ TEST(MeshMarkers, LargeMeshesShowEveryKthTriangle) {
   const auto arr = meshToMarkers(m, "map", ros::Time(1.0), MeshColoring::kHeight, 4, 10);  // k = 3
   size_t triangles = 0;
   for (size_t k = 1; k < arr.markers.size(); ++k) triangles += arr.markers[k].points.size() / 3;
-  EXPECT_EQ(triangles, 9u);  // faces 0, 3, ..., 24
-  EXPECT_EQ(arr.markers.size(), 4u);  // DELETEALL + 4 + 4 + 1
+  EXPECT_EQ(triangles, 9u);                           // faces 0, 3, ..., 24
+  EXPECT_EQ(arr.markers.size(), 4u);                  // DELETEALL + 4 + 4 + 1
   EXPECT_FLOAT_EQ(arr.markers[1].points[3].x, 0.3f);  // first corner of face 3 = vertex 3
 }
 

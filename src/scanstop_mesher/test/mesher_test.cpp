@@ -14,8 +14,8 @@
 #include "scanstop_common/cli_test.h"
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/error.h"
-#include "scanstop_common/shared_data.h"
 #include "scanstop_common/map_dir.h"
+#include "scanstop_common/shared_data.h"
 #include "scanstop_mesher/mesher.h"
 #include "synthetic_room.h"
 

@@ -22,7 +22,8 @@ using namespace scanstop::mesher;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: bpa_mesh INPUT OUTPUT [--radii r1,r2,...] [--voxel m] [--viewpoint x,y,z] [--no-smooth] [--json] [--skip-bad]\n"
+    "usage: bpa_mesh INPUT OUTPUT [--radii r1,r2,...] [--voxel m] [--viewpoint x,y,z] [--no-smooth] [--json] "
+    "[--skip-bad]\n"
     "  INPUT   .ply/.pcd/.xyz cloud, or a map directory (poses.csv + scans/)\n"
     "  OUTPUT  .stl (binary) or .ply (binary, with normals); its directory must exist\n"
     "  --radii      increasing ball radii [m] (default: automatic from the point spacing)\n"
@@ -76,8 +77,8 @@ int main(int argc, char** argv) {
       return usage(e.what());
     }
     std::vector<std::string> skipped;
-    const ScanPoints points =
-        isDirectory(input) ? loadMapDirectory(input, skip_bad ? &skipped : nullptr) : fromCloud(readCloud(input), viewpoint);
+    const ScanPoints points = isDirectory(input) ? loadMapDirectory(input, skip_bad ? &skipped : nullptr)
+                                                 : fromCloud(readCloud(input), viewpoint);
     for (const std::string& w : skipped) std::cerr << "bpa_mesh: warning: skipped: " << w << "\n";
     const MesherResult r = buildMesh(points, config);
     writeMesh(output, r.mesh);
@@ -86,14 +87,16 @@ int main(int argc, char** argv) {
     for (size_t k = 0; k < r.radii_m.size(); ++k) radii << (k ? "," : "") << r.radii_m[k];
     const MeshTopology& t = r.topology;
     if (json) {
-      std::cout << "{\"input\": " << jsonString(input) << ", \"output\": " << jsonString(output) << ", \"input_points\": "
-                << r.input_points << ", \"points\": " << r.points << ", \"used_points\": " << r.stats.used_points
-                << ", \"triangles\": " << t.faces << ", \"nonmanifold_edges\": " << t.nonmanifold_edges
+      std::cout << "{\"input\": " << jsonString(input) << ", \"output\": " << jsonString(output)
+                << ", \"input_points\": " << r.input_points << ", \"points\": " << r.points
+                << ", \"used_points\": " << r.stats.used_points << ", \"triangles\": " << t.faces
+                << ", \"nonmanifold_edges\": " << t.nonmanifold_edges
                 << ", \"nonmanifold_vertices\": " << t.nonmanifold_vertices
                 << ", \"inconsistent_edges\": " << t.inconsistent_edges << ", \"boundary_edges\": " << t.boundary_edges
-                << ", \"components\": " << t.components << ", \"euler\": " << t.euler() << ", \"radii_m\": [" << radii.str()
-                << "], \"spacing_m\": " << jsonNumber(r.spacing_m) << ", \"seconds\": " << jsonNumber(r.seconds)
-                << ", \"bpa_seconds\": " << jsonNumber(r.bpa_seconds) << "}" << std::endl;
+                << ", \"components\": " << t.components << ", \"euler\": " << t.euler() << ", \"radii_m\": ["
+                << radii.str() << "], \"spacing_m\": " << jsonNumber(r.spacing_m)
+                << ", \"seconds\": " << jsonNumber(r.seconds) << ", \"bpa_seconds\": " << jsonNumber(r.bpa_seconds)
+                << "}" << std::endl;
     } else {
       std::cout << "input:        " << input << " (" << r.input_points << " points)\n"
                 << "meshed:       " << r.points << " points (spacing " << r.spacing_m << " m), radii " << radii.str()

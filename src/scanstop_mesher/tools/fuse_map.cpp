@@ -133,9 +133,9 @@ int main(int argc, char** argv) {
                 << ", \"mesh\": " << jsonString(mode) << ", \"scans\": " << scans << ", \"points\": " << st.points
                 << ", \"skipped_points\": " << st.skipped_points << ", \"voxel_m\": " << jsonNumber(config.voxel_m)
                 << ", \"truncation_m\": " << jsonNumber(config.truncation_m)
-                << ", \"carve_m\": " << jsonNumber(config.carve_m) << ", \"splat\": " << config.splat << ", \"voxels\": " << fused.activeVoxels()
-                << ", \"observed_voxels\": " << fused.observedVoxels() << ", \"memory_bytes\": " << fused.memoryBytes()
-                << ", \"voxel_updates\": " << st.voxel_updates
+                << ", \"carve_m\": " << jsonNumber(config.carve_m) << ", \"splat\": " << config.splat
+                << ", \"voxels\": " << fused.activeVoxels() << ", \"observed_voxels\": " << fused.observedVoxels()
+                << ", \"memory_bytes\": " << fused.memoryBytes() << ", \"voxel_updates\": " << st.voxel_updates
                 << ", \"integrate_seconds\": " << jsonNumber(st.integrate_seconds)
                 << ", \"mesh_seconds\": " << jsonNumber(mesh_seconds) << ", \"surface_points\": " << surface_points
                 << ", \"triangles\": " << t.faces << ", \"vertices\": " << t.vertices
@@ -153,9 +153,8 @@ int main(int argc, char** argv) {
       if (mode != "marching_cubes") std::cout << "surface:      " << surface_points << " points with normals\n";
       if (mode != "points")
         std::cout << "mesh:         " << mode << ", " << t.faces << " triangles, " << t.vertices << " vertices, "
-                  << t.components << " components, " << t.boundary_edges << " boundary edges, "
-                  << t.nonmanifold_edges << " non-manifold edges, " << t.nonmanifold_vertices
-                  << " non-manifold vertices\n";
+                  << t.components << " components, " << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges
+                  << " non-manifold edges, " << t.nonmanifold_vertices << " non-manifold vertices\n";
       std::cout << "meshing:      " << mesh_seconds << " s\n"
                 << "written:      " << output << (vdb.empty() ? "" : " and " + vdb) << std::endl;
     }

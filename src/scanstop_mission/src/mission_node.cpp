@@ -13,13 +13,13 @@
 
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
-#include "scanstop_common/stl_io.h"
-#include "scanstop_eval/surface_coverage.h"
-#include "scanstop_eval/ground_truth.h"
 #include "scanstop_common/ros/launch_control.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_common/ros/robot_body.h"
+#include "scanstop_common/stl_io.h"
+#include "scanstop_eval/ground_truth.h"
+#include "scanstop_eval/surface_coverage.h"
 #include "scanstop_mission/report.h"
 #include "scanstop_mission/run_directory.h"
 
@@ -59,10 +59,18 @@ std::map<std::string, std::string> readIdentityParam(const ros::NodeHandle& pnh)
     XmlRpc::XmlRpcValue& x = it->second;
     std::ostringstream text;
     switch (x.getType()) {
-      case XmlRpc::XmlRpcValue::TypeString: text << static_cast<std::string&>(x); break;
-      case XmlRpc::XmlRpcValue::TypeInt: text << static_cast<int>(x); break;
-      case XmlRpc::XmlRpcValue::TypeDouble: text << static_cast<double>(x); break;
-      case XmlRpc::XmlRpcValue::TypeBoolean: text << (static_cast<bool>(x) ? "true" : "false"); break;
+      case XmlRpc::XmlRpcValue::TypeString:
+        text << static_cast<std::string&>(x);
+        break;
+      case XmlRpc::XmlRpcValue::TypeInt:
+        text << static_cast<int>(x);
+        break;
+      case XmlRpc::XmlRpcValue::TypeDouble:
+        text << static_cast<double>(x);
+        break;
+      case XmlRpc::XmlRpcValue::TypeBoolean:
+        text << (static_cast<bool>(x) ? "true" : "false");
+        break;
       default:
         throw ConfigError("parameter '" + pnh.resolveName("run_identity/" + it->first) + "' must be a scalar");
     }
@@ -100,8 +108,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
     double body_margin = 0.02;
     params.optional("leg_check_body_margin_m", body_margin);
     if (!(body_margin >= 0.0 && body_margin <= 1.0))
-      throw ConfigError("parameter '" + pnh.resolveName("leg_check_body_margin_m") + "' = " + std::to_string(body_margin) +
-                        " m must be in [0, 1] m");
+      throw ConfigError("parameter '" + pnh.resolveName("leg_check_body_margin_m") +
+                        "' = " + std::to_string(body_margin) + " m must be in [0, 1] m");
     config_.leg_check_radius_m = body.radius_m + body_margin;
     config_.leg_check_max_z_m = body.height_m;
   }
@@ -153,12 +161,13 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   params.optional("register_timeout_s", timeouts.register_timeout_s);
   params.optional("plan_timeout_s", timeouts.plan_timeout_s);
   params.optional("mesh_timeout_s", timeouts.mesh_timeout_s);
-  for (const auto& [name, value] : {std::pair<const char*, double>{"wait_for_service_timeout_s", timeouts.wait_for_service_timeout_s},
-                                    {"scan_timeout_s", timeouts.scan_timeout_s},
-                                    {"motion_timeout_s", timeouts.motion_timeout_s},
-                                    {"register_timeout_s", timeouts.register_timeout_s},
-                                    {"plan_timeout_s", timeouts.plan_timeout_s},
-                                    {"mesh_timeout_s", timeouts.mesh_timeout_s}}) {
+  for (const auto& [name, value] :
+       {std::pair<const char*, double>{"wait_for_service_timeout_s", timeouts.wait_for_service_timeout_s},
+        {"scan_timeout_s", timeouts.scan_timeout_s},
+        {"motion_timeout_s", timeouts.motion_timeout_s},
+        {"register_timeout_s", timeouts.register_timeout_s},
+        {"plan_timeout_s", timeouts.plan_timeout_s},
+        {"mesh_timeout_s", timeouts.mesh_timeout_s}}) {
     if (!(value > 0.0 && value < 1e6))
       throw ConfigError(std::string("parameter '") + pnh.resolveName(name) + "' = " + std::to_string(value) +
                         " must be in (0, 1e6) s");
@@ -211,11 +220,15 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   }
   const RunDirectory run_directory(config_.run_dir, identity);
   ROS_INFO("mission: run directory %s (%s; identity in %s)", run_directory.path().c_str(),
-           run_directory.created() ? "new" : run_directory.resumed() ? "resuming its mission" : "no mission in it yet",
+           run_directory.created()   ? "new"
+           : run_directory.resumed() ? "resuming its mission"
+                                     : "no mission in it yet",
            run_directory.identityPath().c_str());
   if (!run_directory.setAside().empty())
-    ROS_WARN("mission: the run directory held a mission that ended before its first scan: starting afresh (its "
-             "state kept as %s)", run_directory.setAside().c_str());
+    ROS_WARN(
+        "mission: the run directory held a mission that ended before its first scan: starting afresh (its "
+        "state kept as %s)",
+        run_directory.setAside().c_str());
 
   robot_ = std::make_unique<RosRobotSystem>(nh_, timeouts, map_dir);
   mission_ = std::make_unique<Mission>(
@@ -302,9 +315,10 @@ void MissionNode::surfaceCoverage(const TriangleMesh& world, const Pose2D& start
     const eval::MapSurfaceCoverage& held = run.held;
     truth.surface_coverage = held.share;
     truth.surface_visible = held.visible;
-    ROS_INFO("mission: the map holds %.1f %% of the %zu surface elements visible from the reachable floor "
-             "(%zu candidate scans of %d planes, %.1f s)",
-             held.share * 100.0, held.visible, run.candidates, surface_planes_, run.seconds);
+    ROS_INFO(
+        "mission: the map holds %.1f %% of the %zu surface elements visible from the reachable floor "
+        "(%zu candidate scans of %d planes, %.1f s)",
+        held.share * 100.0, held.visible, run.candidates, surface_planes_, run.seconds);
   } catch (const std::exception& e) {
     ROS_WARN("mission: no surface coverage (%s: %s)", world_file_.c_str(), e.what());
   }
@@ -329,17 +343,18 @@ void MissionNode::runMission() {
       out << std::setprecision(1) << ", final pose error " << s.slam_error_m * 100.0 << " cm (odometry alone "
           << s.odom_error_m * 100.0 << " cm)";
     ROS_INFO_STREAM(out.str());
-    ROS_INFO("mission: map in %s/map, report in %s, summary in %s/summary.json", config_.run_dir.c_str(), report.c_str(),
-             config_.run_dir.c_str());
+    ROS_INFO("mission: map in %s/map, report in %s, summary in %s/summary.json", config_.run_dir.c_str(),
+             report.c_str(), config_.run_dir.c_str());
     if (html_report_) {
       // The plots and report.html: a failure costs the pictures, never the mission.
       const std::string problem = runReportScript(report_script_, config_.run_dir, 300.0);
       if (problem.empty())
         ROS_INFO("mission: plots and %s/report.html written by %s", config_.run_dir.c_str(), report_script_.c_str());
       else
-        ROS_WARN("mission: no plots or report.html (report.md links them): %s; draw them later with "
-                 "`rosrun scanstop_mission make_report.py %s`",
-                 problem.c_str(), config_.run_dir.c_str());
+        ROS_WARN(
+            "mission: no plots or report.html (report.md links them): %s; draw them later with "
+            "`rosrun scanstop_mission make_report.py %s`",
+            problem.c_str(), config_.run_dir.c_str());
     }
   } catch (const std::exception& e) {
     ROS_ERROR("mission: could not write the report: %s", e.what());
@@ -397,8 +412,8 @@ void MissionNode::onMasterEnd(const std::string& why) {
 bool MissionNode::onStart(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   if (running_) {
     res.success = false;
-    res.message = "refused: the mission is already running (state " + std::string(toString(mission_->snapshot().state)) +
-                  "); use mission/resume after a pause";
+    res.message = "refused: the mission is already running (state " +
+                  std::string(toString(mission_->snapshot().state)) + "); use mission/resume after a pause";
     return true;
   }
   if (runner_.joinable()) runner_.join();
@@ -412,7 +427,7 @@ bool MissionNode::onStart(std_srvs::Trigger::Request&, std_srvs::Trigger::Respon
 bool MissionNode::onPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   std::string why;
   res.success = running_ && mission_->pause(&why);
-  res.message = !running_ ? "refused: no mission is running"
+  res.message = !running_     ? "refused: no mission is running"
                 : res.success ? "pausing after the current step"
                               : "refused: " + why;
   return true;
@@ -428,7 +443,7 @@ bool MissionNode::onResume(std_srvs::Trigger::Request&, std_srvs::Trigger::Respo
 bool MissionNode::onAbort(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   std::string why;
   res.success = running_ && mission_->abort(&why);
-  res.message = !running_       ? "refused: no mission is running"
+  res.message = !running_     ? "refused: no mission is running"
                 : res.success ? "aborting after the current step; the state and map are kept"
                               : "refused: " + why;
   return true;

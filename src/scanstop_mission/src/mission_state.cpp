@@ -12,8 +12,8 @@ namespace scanstop {
 namespace mission {
 namespace {
 
-const char* const kStateNames[] = {"IDLE",    "SCANNING", "REGISTERING", "PLANNING", "DRIVING",
-                                   "PAUSED",  "MESHING",  "DONE",        "ABORTED",  "FAILED"};
+const char* const kStateNames[] = {"IDLE",   "SCANNING", "REGISTERING", "PLANNING", "DRIVING",
+                                   "PAUSED", "MESHING",  "DONE",        "ABORTED",  "FAILED"};
 
 YAML::Node poseNode(const Pose2D& p) {
   YAML::Node n(YAML::NodeType::Sequence);
@@ -180,7 +180,8 @@ MissionState MissionState::load(const std::string& path) {
       m.path.emplace_back(n[0].as<double>(), n[1].as<double>());
       m.path_scan_at.push_back(n[2].as<int>(0) != 0);
     }
-    if (root["path_target"]) m.path_target = Eigen::Vector2d(root["path_target"][0].as<double>(), root["path_target"][1].as<double>());
+    if (root["path_target"])
+      m.path_target = Eigen::Vector2d(root["path_target"][0].as<double>(), root["path_target"][1].as<double>());
     m.path_next = root["path_next"].as<int>(0);
     m.path_scan_mark = root["path_scan_mark"].as<int>(-1);
     if (m.path_next < 0 || m.path_next > static_cast<int>(m.path.size()))
@@ -207,7 +208,8 @@ MissionState MissionState::load(const std::string& path) {
     m.clearance_legs = root["clearance_legs"].as<int>(0);
     m.close_legs = root["close_legs"].as<int>(0);
     m.min_clearance_m = root["min_clearance_m"].as<double>(-1.0);
-    for (const YAML::Node& n : root["events"]) m.events.push_back({n["elapsed_s"].as<double>(), n["what"].as<std::string>()});
+    for (const YAML::Node& n : root["events"])
+      m.events.push_back({n["elapsed_s"].as<double>(), n["what"].as<std::string>()});
   } catch (const std::exception& e) {
     throw IoError(path, std::string("corrupt mission state: ") + e.what());
   }

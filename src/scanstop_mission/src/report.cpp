@@ -344,10 +344,10 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
     md << "| surface held by the map within 3 cm (of " << s.surface_visible
        << " 5 cm elements visible from the reachable floor) | " << num(s.surface_coverage * 100.0, 1) << " % |\n";
   md << "| collisions | " << s.collisions << " |\n"
-     << (s.has_clearance ? "| smallest true clearance of the body (all motions) | " + num(s.min_clearance_m * 100.0, 1) +
-                                " cm; " + std::to_string(s.close_legs) + " of " + std::to_string(s.clearance_legs) +
-                                " straight legs closer than 5 cm |\n"
-                          : std::string())
+     << (s.has_clearance ? "| smallest true clearance of the body (all motions) | " +
+                               num(s.min_clearance_m * 100.0, 1) + " cm; " + std::to_string(s.close_legs) + " of " +
+                               std::to_string(s.clearance_legs) + " straight legs closer than 5 cm |\n"
+                         : std::string())
      << "| registrations that did not converge | " << s.unconverged_registrations << " |\n";
   if (s.ate_scans > 0)
     md << "| SLAM pose error over all " << s.ate_scans << " scans (ATE) | RMS " << num(s.ate_rms_m * 100.0, 1)
@@ -358,8 +358,8 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   if (s.has_ground_truth) {
     md << "| final SLAM pose error | " << num(s.slam_error_m * 100.0, 1) << " cm, " << num(s.slam_error_yaw_deg, 2)
        << " deg |\n"
-       << "| final odometry-only error | " << num(s.odom_error_m * 100.0, 1) << " cm, "
-       << num(s.odom_error_yaw_deg, 2) << " deg |\n";
+       << "| final odometry-only error | " << num(s.odom_error_m * 100.0, 1) << " cm, " << num(s.odom_error_yaw_deg, 2)
+       << " deg |\n";
   }
   md << "| compute per cycle (register + plan) | mean " << num(s.compute_per_cycle_mean_s, 2) << " s, max "
      << num(s.compute_per_cycle_max_s, 2) << " s |\n"

@@ -9,8 +9,8 @@
 #include <scanstop_msgs/TakeScan.h>
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <memory>
 #include <thread>
@@ -179,7 +179,8 @@ ScanResult RosRobotSystem::takeScan(int planes) {
   ScanResult r;
   auto srv = std::make_shared<scanstop_msgs::TakeScan>();
   srv->request.planes = static_cast<uint16_t>(planes);
-  if (!callWithTimeout(take_scan_, *srv, timeouts_.wait_for_service_timeout_s, timeouts_.scan_timeout_s, r.message, r.wall_time_s))
+  if (!callWithTimeout(take_scan_, *srv, timeouts_.wait_for_service_timeout_s, timeouts_.scan_timeout_s, r.message,
+                       r.wall_time_s))
     return r;
   copyStep(r, srv->response);
   r.odom_pose = poseOf(srv->response.odom_pose);
@@ -205,8 +206,8 @@ RegisterResult RosRobotSystem::registerScan(const ScanResult& scan) {
   scanstop_msgs::RegisterScan srv;
   srv.request.cloud = taken->response.cloud;
   srv.request.odom_pose = taken->response.odom_pose;
-  if (!callWithTimeout(register_scan_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.register_timeout_s, r.message,
-                       r.wall_time_s))
+  if (!callWithTimeout(register_scan_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.register_timeout_s,
+                       r.message, r.wall_time_s))
     return r;
   copyStep(r, srv.response);
   r.map_pose = poseOf(srv.response.map_pose);
@@ -222,7 +223,8 @@ MotionResult RosRobotSystem::rotate(double angle_rad) {
   MotionResult r;
   scanstop_msgs::Rotate srv;
   srv.request.angle_rad = angle_rad;
-  if (!callWithTimeout(rotate_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.motion_timeout_s, r.message, r.wall_time_s))
+  if (!callWithTimeout(rotate_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.motion_timeout_s, r.message,
+                       r.wall_time_s))
     return r;
   copyStep(r, srv.response);
   r.achieved = srv.response.achieved_angle_rad;
@@ -236,7 +238,8 @@ MotionResult RosRobotSystem::forward(double distance_m) {
   MotionResult r;
   scanstop_msgs::Forward srv;
   srv.request.distance_m = distance_m;
-  if (!callWithTimeout(forward_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.motion_timeout_s, r.message, r.wall_time_s))
+  if (!callWithTimeout(forward_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.motion_timeout_s, r.message,
+                       r.wall_time_s))
     return r;
   copyStep(r, srv.response);
   r.achieved = srv.response.achieved_distance_m;
@@ -247,8 +250,7 @@ MotionResult RosRobotSystem::forward(double distance_m) {
 }
 
 PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
-                                    const std::vector<Contact>& contacts,
-                                    const std::optional<Eigen::Vector2d>& goal) {
+                                    const std::vector<Contact>& contacts, const std::optional<Eigen::Vector2d>& goal) {
   PlanResult r;
   scanstop_msgs::PlanNext srv;
   srv.request.map_pose = ros_conv::toPoseStamped(map_pose, "map", ros::Time::now());
@@ -271,7 +273,8 @@ PlanResult RosRobotSystem::planNext(const Pose2D& map_pose, const std::vector<Ei
     srv.request.goal.y = goal->y();
   }
   if (!mesher_seen_ && build_mesh_.exists()) mesher_seen_ = true;  // a mesher runs: wait for it at the end
-  if (!callWithTimeout(plan_next_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.plan_timeout_s, r.message, r.wall_time_s))
+  if (!callWithTimeout(plan_next_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.plan_timeout_s, r.message,
+                       r.wall_time_s))
     return r;
   copyStep(r, srv.response);
   for (const auto& p : srv.response.path.poses) r.waypoints.emplace_back(p.pose.position.x, p.pose.position.y);
@@ -290,7 +293,8 @@ MeshResult RosRobotSystem::buildMesh(const std::string& output_path) {
   MeshResult r;
   // A mesher seen during the mission may be restarting (respawn): wait for it as for any service.
   // One never seen gets a short look only: no mesher is not an error.
-  const double wait_s = mesher_seen_ ? timeouts_.wait_for_service_timeout_s : std::min(2.0, timeouts_.wait_for_service_timeout_s);
+  const double wait_s =
+      mesher_seen_ ? timeouts_.wait_for_service_timeout_s : std::min(2.0, timeouts_.wait_for_service_timeout_s);
   if (!build_mesh_.waitForExistence(ros::Duration(wait_s))) {
     r.available = false;
     return r;
@@ -299,7 +303,8 @@ MeshResult RosRobotSystem::buildMesh(const std::string& output_path) {
   r.available = true;
   scanstop_msgs::BuildMesh srv;
   srv.request.output_path = output_path;
-  if (!callWithTimeout(build_mesh_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.mesh_timeout_s, r.message, r.wall_time_s))
+  if (!callWithTimeout(build_mesh_, srv, timeouts_.wait_for_service_timeout_s, timeouts_.mesh_timeout_s, r.message,
+                       r.wall_time_s))
     return r;
   copyStep(r, srv.response);
   r.triangles = srv.response.triangles;

@@ -73,8 +73,9 @@ std::string nowUtc() {
 
 void RunIdentity::save(const std::string& path) const {
   YAML::Emitter out;
-  out << YAML::Comment("scanstop run directory: what this run is (written when it began; a resume with other values "
-                       "is refused)")
+  out << YAML::Comment(
+             "scanstop run directory: what this run is (written when it began; a resume with other values "
+             "is refused)")
       << YAML::Newline;
   out << YAML::BeginMap;
   for (const auto& [key, value] : fields) out << YAML::Key << key << YAML::Value << YAML::DoubleQuoted << value;
@@ -88,7 +89,8 @@ RunIdentity RunIdentity::load(const std::string& path) {
   try {
     const YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) throw std::runtime_error("expected a YAML map of field: value");
-    for (const auto& kv : root) id.fields[kv.first.as<std::string>()] = kv.second.IsNull() ? "" : kv.second.as<std::string>();
+    for (const auto& kv : root)
+      id.fields[kv.first.as<std::string>()] = kv.second.IsNull() ? "" : kv.second.as<std::string>();
   } catch (const std::exception& e) {
     throw IoError(path, std::string("not a run identity: ") + e.what());
   }
@@ -125,8 +127,9 @@ RunDirectory::RunDirectory(const std::string& path, const RunIdentity& identity)
   struct stat st;
   if (::stat(path_.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode))
-      throw RunDirectoryError(path_, "the run directory exists but is " + kindOf(st) +
-                                         ", not a directory: give run_dir a directory (or a path that does not exist yet)");
+      throw RunDirectoryError(path_,
+                              "the run directory exists but is " + kindOf(st) +
+                                  ", not a directory: give run_dir a directory (or a path that does not exist yet)");
   } else {
     const int err = makeDirectories(path_);
     if (err != 0)
@@ -145,7 +148,8 @@ RunDirectory::RunDirectory(const std::string& path, const RunIdentity& identity)
       set_aside_ = path_ + "/mission_state.yaml.unstarted";
       if (std::rename((path_ + "/mission_state.yaml").c_str(), set_aside_.c_str()) != 0)
         throw RunDirectoryError(path_, std::string("cannot set aside mission_state.yaml of a mission that took no "
-                                                   "scan (") + std::strerror(errno) + ")");
+                                                   "scan (") +
+                                           std::strerror(errno) + ")");
     }
     has_mission = false;
   }

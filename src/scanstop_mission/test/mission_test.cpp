@@ -50,43 +50,43 @@ double hitParameter(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Ei
 class FakeSystem : public RobotSystem {
  public:
   // World
-  Pose2D truth;                                   // true pose (map frame = start pose)
-  Pose2D odom;                                    // odometry (drifts: 3 % long, 1 deg per metre)
+  Pose2D truth;  // true pose (map frame = start pose)
+  Pose2D odom;   // odometry (drifts: 3 % long, 1 deg per metre)
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls;
   // Explorer
   std::vector<Eigen::Vector2d> targets;
   std::vector<bool> visited;
-  std::vector<Eigen::Vector2d> goals;  ///< goals of the plans asked for with one (the way back)
-  std::vector<Eigen::Vector2d> home_via;  ///< landmarks (scan_at) of the way back before its target
+  std::vector<Eigen::Vector2d> goals;                     ///< goals of the plans asked for with one (the way back)
+  std::vector<Eigen::Vector2d> home_via;                  ///< landmarks (scan_at) of the way back before its target
   Eigen::Vector2d goal_offset = Eigen::Vector2d::Zero();  ///< the way back's target = goal + this
   bool fail_goal_plans = false;                           ///< every plan with a goal fails
-  bool goal_runs_away = false;  ///< the way back's target = the robot's position + goal_offset (never reached)
-  size_t scans_at_first_goal = 0;                         ///< registered scans when the way back was first planned
+  bool goal_runs_away = false;     ///< the way back's target = the robot's position + goal_offset (never reached)
+  size_t scans_at_first_goal = 0;  ///< registered scans when the way back was first planned
   int plan_failures_left = 0;
   bool always_fail_plan = false;
-  bool insert_intermediate = false;               // add a mid-point landmark with scan_at = true
-  std::optional<double> leg_clearance;            // every plan's clearance of every leg (PlanResult::clearance_m)
+  bool insert_intermediate = false;     // add a mid-point landmark with scan_at = true
+  std::optional<double> leg_clearance;  // every plan's clearance of every leg (PlanResult::clearance_m)
   // SLAM
   std::vector<Pose2D> slam_poses;
-  int lose_register_answers = 0;                  // store the scan but report failure this many times
+  int lose_register_answers = 0;  // store the scan but report failure this many times
   // Observations
   double max_forward = 0.0;
-  double plan_d_max_m = 0.0;  ///< PlanResult::d_max_m of every plan (0: not said)
-  std::vector<double> forwards;                   // every forward distance asked for, in order
-  std::vector<std::pair<char, double>> motions;   // every motion: ('r', angle) or ('f', distance)
-  std::vector<Eigen::Vector2d> trail;             // the true position after every forward motion
-  long first_collision = -1;                      // index into motions of the first colliding one
+  double plan_d_max_m = 0.0;                     ///< PlanResult::d_max_m of every plan (0: not said)
+  std::vector<double> forwards;                  // every forward distance asked for, in order
+  std::vector<std::pair<char, double>> motions;  // every motion: ('r', angle) or ('f', distance)
+  std::vector<Eigen::Vector2d> trail;            // the true position after every forward motion
+  long first_collision = -1;                     // index into motions of the first colliding one
   /// The true clearance a motion reports (simulation), by kind ('r', 'f') and command; unset: none.
   std::function<std::optional<double>(char, double)> clearance_of;
   bool scan_walls = false;  ///< the scans see the walls (points every 2 cm at 0.1-0.5 m height); else they do not
-  std::vector<size_t> forwards_at_plan;           // forwards.size() at each plan
+  std::vector<size_t> forwards_at_plan;             // forwards.size() at each plan
   std::vector<std::vector<Contact>> plan_contacts;  // the contacts each plan was given
   int scans_taken = 0;
-  std::function<void(int)> on_scan;               // called at every takeScan with the count so far
-  std::string state_path;                         // checked at every scan: saved state has all scans
+  std::function<void(int)> on_scan;  // called at every takeScan with the count so far
+  std::string state_path;            // checked at every scan: saved state has all scans
   int saved_scan_mismatches = 0;
-  bool report_odometry = false;                   // currentOdometry() answers (the base's odom topic)
-  int mesh_failures_left = 0;                     // buildMesh fails this many times (mesher killed)
+  bool report_odometry = false;  // currentOdometry() answers (the base's odom topic)
+  int mesh_failures_left = 0;    // buildMesh fails this many times (mesher killed)
   int mesh_calls = 0;
   Pose2D relax_shift;  // applied to every scan but the first when the mesh is built (a late relaxation)
 
@@ -376,7 +376,7 @@ TEST(Mission, ReturnsToTheStartOnceExplorationIsComplete) {
   EXPECT_EQ(m.run(), State::Done);
   const MissionState s = m.snapshot();
   EXPECT_TRUE(s.complete);
-  ASSERT_EQ(s.scans.size(), 4u);  // start, two targets, back at the start
+  ASSERT_EQ(s.scans.size(), 4u);    // start, two targets, back at the start
   ASSERT_EQ(sys.goals.size(), 1u);  // one plan of the way back, to the first scan's position
   EXPECT_LT(sys.goals[0].norm(), 1e-9);
   // Driven there (the fake's odometry turns 1 deg per metre: the 4.2 m leg home ends ~0.2 m off)
@@ -397,9 +397,9 @@ TEST(Mission, ReturnsToTheStartOnceExplorationIsComplete) {
 TEST(Mission, HomeScanTravelSpacesTheScansOnTheWayBack) {
   // One target 6 m out; the way back passes landmarks every 1.5 m. Scans on it: at the first
   // landmark after home_scan_travel of driving, and at the start.
-  for (const auto& [spacing, expected_x] : {std::make_pair(4.0, std::vector<double>{1.5, 0.0}),
-                                            std::make_pair(2.0, std::vector<double>{3.0, 0.0}),
-                                            std::make_pair(0.0, std::vector<double>{4.5, 3.0, 1.5, 0.0})}) {
+  for (const auto& [spacing, expected_x] :
+       {std::make_pair(4.0, std::vector<double>{1.5, 0.0}), std::make_pair(2.0, std::vector<double>{3.0, 0.0}),
+        std::make_pair(0.0, std::vector<double>{4.5, 3.0, 1.5, 0.0})}) {
     TempDir dir;
     FakeSystem sys;
     sys.targets = {{6.0, 0.0}};
@@ -415,11 +415,13 @@ TEST(Mission, HomeScanTravelSpacesTheScansOnTheWayBack) {
     // The scans of the way back (the fake's odometry drifts: the 6 m leg out may take a second try).
     const size_t k = sys.scans_at_first_goal;
     std::string where;
-    for (const auto& scan : s.scans) where += " (" + std::to_string(scan.map_pose.x) + ", " + std::to_string(scan.map_pose.y) + ")";
+    for (const auto& scan : s.scans)
+      where += " (" + std::to_string(scan.map_pose.x) + ", " + std::to_string(scan.map_pose.y) + ")";
     ASSERT_GE(k, 2u) << where;
     ASSERT_EQ(s.scans.size() - k, expected_x.size()) << "home_scan_travel " << spacing << ", scans at" << where;
     for (size_t i = 0; i < expected_x.size(); ++i)
-      EXPECT_NEAR(s.scans[k + i].map_pose.x, expected_x[i], 0.2) << "home_scan_travel " << spacing << ", scan " << k + i;
+      EXPECT_NEAR(s.scans[k + i].map_pose.x, expected_x[i], 0.2)
+          << "home_scan_travel " << spacing << ", scan " << k + i;
   }
 }
 
@@ -448,7 +450,7 @@ TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackTheStartIsUnreachableOrItNever
   };
   // Every plan of the way back fails: the exploration is kept, the mission ends Done.
   const End failed = runWith([](FakeSystem& s) { s.fail_goal_plans = true; }, "no way back to the start");
-  EXPECT_EQ(failed.state.scans.size(), 3u);                          // start and the two targets
+  EXPECT_EQ(failed.state.scans.size(), 3u);                             // start and the two targets
   EXPECT_EQ(failed.goal_plans, 1u + MissionConfig().max_step_retries);  // one plan, retried
   // The start is not reachable: the way back ends 1 m from it (the nearest reachable cell). Once the
   // robot stands there, the next plan of the way back ends the mission.
@@ -456,7 +458,7 @@ TEST(Mission, EndsWithAWarningWhenThereIsNoWayBackTheStartIsUnreachableOrItNever
                                   "is not reachable in the map; the robot is at the reachable cell nearest to it");
   EXPECT_EQ(unreachable.goal_plans, 2u);
   EXPECT_EQ(unreachable.state.scans.size(), 4u);  // start, two targets, the end of the way back
-  EXPECT_EQ(unreachable.state.plans, 5);  // two targets, "complete", two of the way back: the last counts too
+  EXPECT_EQ(unreachable.state.plans, 5);          // two targets, "complete", two of the way back: the last counts too
   // The way back never arrives anywhere (its target moves on each time): 3 plans, then the end.
   const End never = runWith(
       [](FakeSystem& s) {
@@ -538,7 +540,8 @@ TEST(Mission, ScanOnTheWayByErrorScansAtALandmarkOnlyWhereTheNextLegWouldLeaveTh
     c.scan_on_the_way = "error";
     c.scan_error_bound_m = bound;
     std::vector<std::string> lines;
-    Mission m(c, sys, [&](const std::string& l) { lines.push_back(l); }, quiet);
+    Mission m(
+        c, sys, [&](const std::string& l) { lines.push_back(l); }, quiet);
     EXPECT_EQ(m.run(), State::Done);
     const MissionState s = m.snapshot();
     std::vector<double> xs;
@@ -555,8 +558,9 @@ TEST(Mission, ScanOnTheWayByErrorScansAtALandmarkOnlyWhereTheNextLegWouldLeaveTh
       EXPECT_TRUE(logged);
     } else {  // no scan on the way (the fake replans once more to the far target, 0.2 m short of it)
       for (size_t k = 2; k < xs.size(); ++k) EXPECT_NEAR(xs[k], 9.0, 0.3) << "scan " << k;
-      EXPECT_TRUE(std::none_of(lines.begin(), lines.end(),
-                               [](const std::string& l) { return l.find("scanning on the way") != std::string::npos; }));
+      EXPECT_TRUE(std::none_of(lines.begin(), lines.end(), [](const std::string& l) {
+        return l.find("scanning on the way") != std::string::npos;
+      }));
     }
   }
 }
@@ -665,16 +669,20 @@ TEST(Mission, ALegBehindTheRobotIsDrivenBackwardsAfterTheSmallerTurn) {
   };
   double largest_turn = 0.0, backwards = 0.0, forwards = 0.0;
   for (const auto& [kind, amount] : run(true)) {
-    if (kind == 'r') largest_turn = std::max(largest_turn, std::abs(amount));
-    else (amount < 0.0 ? backwards : forwards) += std::abs(amount);
+    if (kind == 'r')
+      largest_turn = std::max(largest_turn, std::abs(amount));
+    else
+      (amount < 0.0 ? backwards : forwards) += std::abs(amount);
   }
   EXPECT_LT(largest_turn, 0.2);
   EXPECT_NEAR(backwards, std::hypot(2.5, 0.4), 0.1);
   EXPECT_DOUBLE_EQ(forwards, 0.0);
   largest_turn = 0.0;
   for (const auto& [kind, amount] : run(false)) {
-    if (kind == 'r') largest_turn = std::max(largest_turn, std::abs(amount));
-    else EXPECT_GT(amount, 0.0);
+    if (kind == 'r')
+      largest_turn = std::max(largest_turn, std::abs(amount));
+    else
+      EXPECT_GT(amount, 0.0);
   }
   EXPECT_GT(largest_turn, M_PI - 0.2);
 }
@@ -741,7 +749,8 @@ TEST(Mission, AfterDrivingBlindTheRobotScansToRelocalizeAndGoesOnWithTheSamePath
     m.run();
     Outcome o;
     const MissionState s = m.snapshot();
-    for (const auto& e : s.events) o.relocalized += e.what.find("then scanning to re-localize") != std::string::npos ? 1 : 0;
+    for (const auto& e : s.events)
+      o.relocalized += e.what.find("then scanning to re-localize") != std::string::npos ? 1 : 0;
     o.reached = std::hypot(sys.truth.x - 6.0, sys.truth.y) < 0.3;
     o.unreachable = s.unreachable.size();
     o.scans = sys.scans_taken;
@@ -832,7 +841,8 @@ TEST(Mission, AStopRightAfterAScanIsNoReasonToScanAgainThere) {
   m.run();
   const MissionState s = m.snapshot();
   bool relocalized = false;
-  for (const auto& e : s.events) relocalized = relocalized || e.what.find("then scanning to re-localize") != std::string::npos;
+  for (const auto& e : s.events)
+    relocalized = relocalized || e.what.find("then scanning to re-localize") != std::string::npos;
   EXPECT_FALSE(relocalized);
   ASSERT_EQ(s.unreachable.size(), 1u);
   EXPECT_NEAR(s.unreachable[0].x(), -2.5, 1e-9);
@@ -941,7 +951,8 @@ TEST(Mission, TheContactIsTheScannedPointTheBodyTouchedNotAlwaysStraightAhead) {
   ASSERT_GE(resumed.snapshot().contacts.size(), 1u);
   EXPECT_DOUBLE_EQ(resumed.snapshot().contacts[0].radius_m, c.contact_point_radius_m);
   bool logged = false;
-  for (const auto& e : s.events) logged = logged || e.what.find("(at the nearest point of the latest scan, disc 0.05 m)") != std::string::npos;
+  for (const auto& e : s.events)
+    logged = logged || e.what.find("(at the nearest point of the latest scan, disc 0.05 m)") != std::string::npos;
   EXPECT_TRUE(logged);
 }
 
@@ -949,7 +960,8 @@ TEST(Mission, TheContactBoundEndsTheMissionWithItsReasonAndKeepsTheMap) {
   TempDir dir;
   FakeSystem sys;
   // A box of walls: every target outside it ends in a contact.
-  sys.walls = {{{1.5, -1.5}, {1.5, 1.5}}, {{-1.5, -1.5}, {-1.5, 1.5}}, {{-1.5, 1.5}, {1.5, 1.5}}, {{-1.5, -1.5}, {1.5, -1.5}}};
+  sys.walls = {
+      {{1.5, -1.5}, {1.5, 1.5}}, {{-1.5, -1.5}, {-1.5, 1.5}}, {{-1.5, 1.5}, {1.5, 1.5}}, {{-1.5, -1.5}, {1.5, -1.5}}};
   sys.targets = {{3.0, 0.0}, {-3.0, 0.0}, {0.0, 3.0}, {0.0, -3.0}, {3.0, 3.0}};
   MissionConfig c = config(dir.path());
   c.max_contacts = 3;
@@ -959,8 +971,8 @@ TEST(Mission, TheContactBoundEndsTheMissionWithItsReasonAndKeepsTheMap) {
   EXPECT_EQ(s.contacts.size(), 3u);
   EXPECT_EQ(s.collisions, 3);
   EXPECT_NE(s.complete_reason.find("safety stop: 3 contacts (max_contacts 3)"), std::string::npos) << s.complete_reason;
-  EXPECT_GE(s.scans.size(), 3u);   // the map so far is kept ...
-  EXPECT_EQ(sys.mesh_calls, 1);    // ... and meshed
+  EXPECT_GE(s.scans.size(), 3u);  // the map so far is kept ...
+  EXPECT_EQ(sys.mesh_calls, 1);   // ... and meshed
   EXPECT_FALSE(s.complete);
   // With the back-off off, the next motion after a contact is not backwards.
   TempDir dir2;
@@ -1223,7 +1235,8 @@ TEST(Mission, AdoptsAScanSlamFinishedRegisteringAfterTheRestart) {
   ASSERT_EQ(s.scans.size(), sys.slam_poses.size());
   for (size_t i = 0; i < s.scans.size(); ++i) EXPECT_EQ(s.scans[i].index, static_cast<int>(i));
   bool adopted = false;
-  for (const auto& e : s.events) adopted = adopted || e.what == "adopted scan " + std::to_string(before) + " registered before a restart";
+  for (const auto& e : s.events)
+    adopted = adopted || e.what == "adopted scan " + std::to_string(before) + " registered before a restart";
   EXPECT_TRUE(adopted);
 }
 

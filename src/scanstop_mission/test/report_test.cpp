@@ -2,9 +2,9 @@
 #include <stdlib.h>
 
 #include <cmath>
-#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "scanstop_common/file_util.h"
 #include "scanstop_mission/report.h"
@@ -151,8 +151,9 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   EXPECT_NE(json.find("\"surface_coverage\": null"), std::string::npos) << json;
   EXPECT_NE(sim_json.find("\"true_coverage\": 0.8160"), std::string::npos) << sim_json;
   EXPECT_NE(sim_json.find("\"true_reachable_floor_m2\": 96.00"), std::string::npos) << sim_json;
-  EXPECT_NE(readFile(dir + "/report.md").find("| coverage of the truly reachable floor (96.0 m2, from the world) | 81.6 % |"),
-            std::string::npos)
+  EXPECT_NE(
+      readFile(dir + "/report.md").find("| coverage of the truly reachable floor (96.0 m2, from the world) | 81.6 % |"),
+      std::string::npos)
       << readFile(dir + "/report.md");
   EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
@@ -162,7 +163,8 @@ TEST(Report, ScriptPlotsAreLinkedAndTheScriptRun) {
   const std::string dir = mkdtemp(pattern);
   // make_report.py draws the plots: report.md links report.html and its PNGs, the simple ones are not drawn.
   const std::string text = readFile(writeReport(twoScans(), dir, {}, std::nullopt, true));
-  for (const char* name : {"(report.html)", "(report_coverage.png)", "(report_trajectory.png)", "(report_pose_error.png)"})
+  for (const char* name :
+       {"(report.html)", "(report_coverage.png)", "(report_trajectory.png)", "(report_pose_error.png)"})
     EXPECT_NE(text.find(name), std::string::npos) << name << "\n" << text;
   EXPECT_TRUE(cv::imread(dir + "/coverage.png").empty());
   // The script runner: success, a failing script (status and log named), a missing one, a hanging one.

@@ -23,8 +23,12 @@ std::string tempDir() {
 
 RunIdentity identityOf(const std::string& world, const std::string& start_pose = "", const std::string& seed = "1") {
   RunIdentity id;
-  id.fields = {{"world", world}, {"world_file_fnv1a64", "0123456789abcdef"}, {"start_pose", start_pose},
-               {"error_profile", "thesis"}, {"seed", seed}, {"planes", "400"}};
+  id.fields = {{"world", world},
+               {"world_file_fnv1a64", "0123456789abcdef"},
+               {"start_pose", start_pose},
+               {"error_profile", "thesis"},
+               {"seed", seed},
+               {"planes", "400"}};
   return id;
 }
 
@@ -96,7 +100,8 @@ TEST(RunDirectory, RefusesAnotherStartPoseOrSeed) {
   const std::string dir = finishedRun(identityOf("room_10x8", "1,1,0", "1"));
   EXPECT_NE(messageOf(dir, identityOf("room_10x8", "2,1,0", "1")).find("start_pose is '1,1,0' there, '2,1,0' now"),
             std::string::npos);
-  EXPECT_NE(messageOf(dir, identityOf("room_10x8", "1,1,0", "7")).find("seed is '1' there, '7' now"), std::string::npos);
+  EXPECT_NE(messageOf(dir, identityOf("room_10x8", "1,1,0", "7")).find("seed is '1' there, '7' now"),
+            std::string::npos);
 }
 
 TEST(RunDirectory, ADirectoryWithoutAMissionTakesTheNewIdentity) {
@@ -136,7 +141,8 @@ TEST(RunDirectory, AMissionThatEndedBeforeItsFirstScanIsSetAsideNotDefended) {
   EXPECT_EQ(RunIdentity::load(corrected.identityPath()).fields.at("start_pose"), "2,5,0");
   // One scan in the map (even when the state lists none) is a mission: another start pose is refused.
   const std::string scanned = endedWithPoses("index,file\n0,scans/scan_0000.pcd\n");
-  EXPECT_NE(messageOf(scanned, identityOf("room_10x8", "2,5,0")).find("start_pose is '0,4,0' there"), std::string::npos);
+  EXPECT_NE(messageOf(scanned, identityOf("room_10x8", "2,5,0")).find("start_pose is '0,4,0' there"),
+            std::string::npos);
   // A state that lists a scan is a mission too.
   const std::string listed = finishedRun(identityOf("room_10x8", "0,4,0"));
   EXPECT_NE(messageOf(listed, identityOf("room_10x8", "2,5,0")).find("start_pose is '0,4,0' there"), std::string::npos);
@@ -146,7 +152,8 @@ TEST(RunDirectory, AnEarlierVersionsDirectoryIsCheckedByItsMissionsWorld) {
   // No run_identity.yaml: mission_state.yaml's world decides.
   const std::string dir = tempDir();
   saveMission(dir, "room_10x8", State::Done, 2);
-  EXPECT_NE(messageOf(dir, identityOf("corridor")).find("world is 'room_10x8' there, 'corridor' now"), std::string::npos);
+  EXPECT_NE(messageOf(dir, identityOf("corridor")).find("world is 'room_10x8' there, 'corridor' now"),
+            std::string::npos);
   RunDirectory same(dir, identityOf("room_10x8"));
   EXPECT_TRUE(same.resumed());
   EXPECT_EQ(RunIdentity::load(same.identityPath()).fields.at("world"), "room_10x8");

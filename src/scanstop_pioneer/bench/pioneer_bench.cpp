@@ -75,7 +75,7 @@ int motionBench() {
     double target;
   };
   const Case cases[] = {{MotionKind::kRotate, M_PI / 2}, {MotionKind::kRotate, -M_PI / 4}, {MotionKind::kRotate, M_PI},
-                        {MotionKind::kRotate, -0.1},     {MotionKind::kForward, 0.25},   {MotionKind::kForward, 1.0},
+                        {MotionKind::kRotate, -0.1},     {MotionKind::kForward, 0.25},     {MotionKind::kForward, 1.0},
                         {MotionKind::kForward, -0.3},    {MotionKind::kForward, 0.05}};
   double max_req[2] = {0, 0}, max_true[2] = {0, 0};
   int failures = 0;
@@ -88,7 +88,8 @@ int motionBench() {
                              : std::copysign(std::hypot(after.x - before.x, after.y - before.y), c.target);
     const int k = c.kind == MotionKind::kRotate ? 0 : 1;
     const double e_req = std::abs(r.achieved - c.target);
-    const double e_true = k == 0 ? std::abs(scanstop::normalizeAngle(truth - r.achieved)) : std::abs(truth - r.achieved);
+    const double e_true =
+        k == 0 ? std::abs(scanstop::normalizeAngle(truth - r.achieved)) : std::abs(truth - r.achieved);
     max_req[k] = std::max(max_req[k], e_req);
     max_true[k] = std::max(max_true[k], e_true);
     failures += r.success ? 0 : 1;
@@ -107,9 +108,10 @@ int motionBench() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const scanstop::Options opts("pioneer_bench",
-                               "usage: pioneer_bench\n"
-                               "  the P2OS parser's throughput and the motion primitives' accuracy against the emulator\n");
+  const scanstop::Options opts(
+      "pioneer_bench",
+      "usage: pioneer_bench\n"
+      "  the P2OS parser's throughput and the motion primitives' accuracy against the emulator\n");
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   int rc = parserBench();
   rc += motionBench();

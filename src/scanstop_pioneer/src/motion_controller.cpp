@@ -41,13 +41,20 @@ void MotionConfig::validate(const std::string& p) const {
 
 const char* toString(MotionOutcome outcome) {
   switch (outcome) {
-    case MotionOutcome::kRunning: return "running";
-    case MotionOutcome::kReached: return "reached";
-    case MotionOutcome::kStall: return "stall";
-    case MotionOutcome::kBumper: return "bumper";
-    case MotionOutcome::kTimeout: return "timeout";
-    case MotionOutcome::kMotorsDisabled: return "motors disabled";
-    case MotionOutcome::kAborted: return "aborted";
+    case MotionOutcome::kRunning:
+      return "running";
+    case MotionOutcome::kReached:
+      return "reached";
+    case MotionOutcome::kStall:
+      return "stall";
+    case MotionOutcome::kBumper:
+      return "bumper";
+    case MotionOutcome::kTimeout:
+      return "timeout";
+    case MotionOutcome::kMotorsDisabled:
+      return "motors disabled";
+    case MotionOutcome::kAborted:
+      return "aborted";
   }
   return "?";
 }
@@ -152,17 +159,17 @@ MotionCommand MotionController::update(const MotionSample& s) {
     }
     if (stall_since_ >= 0.0 && s.t_s - stall_since_ >= config_.stall_time_s) {
       const std::string wheels = left && right ? "both wheels" : (left ? "left wheel" : "right wheel");
-      beginStop(MotionOutcome::kStall,
-                "stall: " + wheels + " stalled after " + unit(achieved_) + " of " + unit(target_) +
-                    ": the robot is blocked",
-                s.t_s);
+      beginStop(
+          MotionOutcome::kStall,
+          "stall: " + wheels + " stalled after " + unit(achieved_) + " of " + unit(target_) + ": the robot is blocked",
+          s.t_s);
       command.stop = true;
       return command;
     }
     if (disabled_since_ >= 0.0 && s.t_s - disabled_since_ >= config_.motors_disabled_time_s) {
       beginStop(MotionOutcome::kMotorsDisabled,
-                "the robot reports its motors disabled (motor switch off or ENABLE refused) after " +
-                    unit(achieved_) + " of " + unit(target_),
+                "the robot reports its motors disabled (motor switch off or ENABLE refused) after " + unit(achieved_) +
+                    " of " + unit(target_),
                 s.t_s);
       command.stop = true;
       return command;
@@ -184,8 +191,8 @@ MotionCommand MotionController::update(const MotionSample& s) {
       // Slow down as sqrt(2 a d) so that the robot arrives at the approach zone at the minimum
       // speed, then creep: the overshoot after the stop command stays small despite SIP latency.
       const double d = std::max(0.0, remaining - config_.approach_angle_rad);
-      const double w = std::clamp(std::sqrt(2.0 * config_.angular_decel_radps2 * d),
-                                  config_.min_angular_speed_radps, config_.angular_speed_radps);
+      const double w = std::clamp(std::sqrt(2.0 * config_.angular_decel_radps2 * d), config_.min_angular_speed_radps,
+                                  config_.angular_speed_radps);
       command.w_radps = sign * w;
     } else {
       const double d = std::max(0.0, remaining - config_.approach_distance_m);

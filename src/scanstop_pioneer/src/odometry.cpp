@@ -17,8 +17,10 @@ void RobotParams::validate(const std::string& prefix) const {
 
 int wrapDelta15(uint16_t new_value, uint16_t old_value) {
   int d = static_cast<int>(new_value & 0x7FFF) - static_cast<int>(old_value & 0x7FFF);
-  if (d > 0x1000) d -= 0x8000;
-  else if (d < -0x1000) d += 0x8000;
+  if (d > 0x1000)
+    d -= 0x8000;
+  else if (d < -0x1000)
+    d += 0x8000;
   return d;
 }
 

@@ -67,8 +67,8 @@ SyncInfo P2osClient::connect() {
       } else {
         char limit[32];
         std::snprintf(limit, sizeof(limit), "%.3g s", config_.reply_timeout_s);
-        last_problem = "no reply to SYNC" + std::to_string(step) + " within " + limit +
-                       (seen.empty() ? "" : " (" + seen + ")");
+        last_problem =
+            "no reply to SYNC" + std::to_string(step) + " within " + limit + (seen.empty() ? "" : " (" + seen + ")");
       }
       // Either an earlier session is open or the robot is in an unknown state: close and restart.
       closeStaleSession();

@@ -117,8 +117,10 @@ MotionResult PioneerDriver::runMotion(MotionKind kind, double target) {
     failed.message = e.what();
     return failed;
   }
-  const double speed = kind == MotionKind::kRotate ? config_.motion.angular_speed_radps : config_.motion.linear_speed_mps;
-  const double decel = kind == MotionKind::kRotate ? config_.motion.angular_decel_radps2 : config_.motion.linear_decel_mps2;
+  const double speed =
+      kind == MotionKind::kRotate ? config_.motion.angular_speed_radps : config_.motion.linear_speed_mps;
+  const double decel =
+      kind == MotionKind::kRotate ? config_.motion.angular_decel_radps2 : config_.motion.linear_decel_mps2;
   const double limit_s = config_.motion.timeout_factor * (std::abs(target) / speed + speed / decel) +
                          config_.motion.timeout_extra_s + config_.motion.settle_timeout_s + config_.sip_timeout_s + 3.0;
 
@@ -239,8 +241,8 @@ bool PioneerDriver::connectOnce() {
     status_.last_error = error;
     status_.link = LinkState::kDisconnected;
   }
-  if (changed) log(2, "cannot connect to the robot: " + error + " (retrying every " +
-                          seconds(config_.reconnect_period_s) + ")");
+  if (changed)
+    log(2, "cannot connect to the robot: " + error + " (retrying every " + seconds(config_.reconnect_period_s) + ")");
   return false;
 }
 
@@ -348,7 +350,9 @@ void PioneerDriver::serve() {
 void PioneerDriver::sendVelocity(double v_mps, double w_radps, double now) {
   // The last guard, whatever computed the setpoint: never faster than the configured bounds.
   v_mps = std::isfinite(v_mps) ? std::clamp(v_mps, -config_.max_linear_speed_mps, config_.max_linear_speed_mps) : 0.0;
-  w_radps = std::isfinite(w_radps) ? std::clamp(w_radps, -config_.max_angular_speed_radps, config_.max_angular_speed_radps) : 0.0;
+  w_radps = std::isfinite(w_radps)
+                ? std::clamp(w_radps, -config_.max_angular_speed_radps, config_.max_angular_speed_radps)
+                : 0.0;
   const int vel = static_cast<int>(std::lround(v_mps * 1000.0));
   const int rvel = static_cast<int>(std::lround(w_radps * kRadToDeg));
   if (vel == sent_vel_ && rvel == sent_rvel_ && (vel != 0 || rvel != 0) == sent_nonzero_) return;

@@ -12,9 +12,7 @@
 
 namespace scanstop {
 namespace pioneer {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 PioneerDriverNode::Parameters PioneerDriverNode::readParameters(ros_params::ParamReader& params) {
   Parameters p;
@@ -87,9 +85,12 @@ PioneerDriverNode::PioneerDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
 
   driver_ = std::make_unique<PioneerDriver>(config);
   driver_->setLogCallback([](int level, const std::string& text) {
-    if (level == 0) ROS_INFO("pioneer_driver: %s", text.c_str());
-    else if (level == 1) ROS_WARN("pioneer_driver: %s", text.c_str());
-    else ROS_ERROR("pioneer_driver: %s", text.c_str());
+    if (level == 0)
+      ROS_INFO("pioneer_driver: %s", text.c_str());
+    else if (level == 1)
+      ROS_WARN("pioneer_driver: %s", text.c_str());
+    else
+      ROS_ERROR("pioneer_driver: %s", text.c_str());
   });
   driver_->setSipCallback([this](const DriverStatus& s) { onSip(s); });
 

@@ -108,8 +108,8 @@ int main(int argc, char** argv) {
     scanstop::pioneer::PtyEmulator emulator(config, link);
     emulator.start();
     if (start_open) emulator.command("still_open");
-    std::cout << "pioneer_emulator: robot '" << config.identity.name << "' (" << config.identity.subclass
-              << ") on " << emulator.slavePath() << (link.empty() ? "" : " (link " + link + ")")
+    std::cout << "pioneer_emulator: robot '" << config.identity.name << "' (" << config.identity.subclass << ") on "
+              << emulator.slavePath() << (link.empty() ? "" : " (link " + link + ")")
               << (start_open ? ", session left open" : "") << std::endl;
     std::string pending;
     while (!g_stop) {

@@ -19,11 +19,16 @@ double approach(double value, double target, double step) {
 
 const char* toString(EmulatorState state) {
   switch (state) {
-    case EmulatorState::kWait: return "WAIT";
-    case EmulatorState::kGot0: return "GOT0";
-    case EmulatorState::kGot1: return "GOT1";
-    case EmulatorState::kConnected: return "CONNECTED";
-    case EmulatorState::kOpen: return "OPEN";
+    case EmulatorState::kWait:
+      return "WAIT";
+    case EmulatorState::kGot0:
+      return "GOT0";
+    case EmulatorState::kGot1:
+      return "GOT1";
+    case EmulatorState::kConnected:
+      return "CONNECTED";
+    case EmulatorState::kOpen:
+      return "OPEN";
   }
   return "?";
 }
@@ -109,12 +114,23 @@ void RobotEmulator::handle(const ClientCommand& c, double t) {
   const double v = c.arg == ClientCommand::Arg::kInt ? c.value : 0.0;
   switch (c.number) {
     case cmd::kPulse:
-    case cmd::kOpen: break;
-    case cmd::kClose: closeSession(); break;
-    case cmd::kEnable: motors_enabled_ = c.value != 0 && !faults_.motor_power_off; break;
-    case cmd::kVel: set_v_mps_ = v * 1e-3; break;
-    case cmd::kRVel: set_w_radps_ = v * M_PI / 180.0; break;
-    case cmd::kStop: set_v_mps_ = set_w_radps_ = 0.0; break;
+    case cmd::kOpen:
+      break;
+    case cmd::kClose:
+      closeSession();
+      break;
+    case cmd::kEnable:
+      motors_enabled_ = c.value != 0 && !faults_.motor_power_off;
+      break;
+    case cmd::kVel:
+      set_v_mps_ = v * 1e-3;
+      break;
+    case cmd::kRVel:
+      set_w_radps_ = v * M_PI / 180.0;
+      break;
+    case cmd::kStop:
+      set_v_mps_ = set_w_radps_ = 0.0;
+      break;
     case cmd::kEStop:
       set_v_mps_ = set_w_radps_ = v_mps_ = w_radps_ = 0.0;
       break;
@@ -128,7 +144,8 @@ void RobotEmulator::handle(const ClientCommand& c, double t) {
     case cmd::kSetRA:
       if (v > 0) rot_accel_ = v * M_PI / 180.0;
       break;
-    default: break;  // other commands are accepted and ignored
+    default:
+      break;  // other commands are accepted and ignored
   }
 }
 
@@ -222,12 +239,11 @@ std::vector<uint8_t> RobotEmulator::takeOutput() {
 
 std::string RobotEmulator::statusLine() const {
   char buf[256];
-  std::snprintf(buf, sizeof(buf),
-                "state %s motors %s pose %.3f %.3f %.4f v %.3f w %.3f packets %llu sips %llu sessions %llu%s",
-                toString(state_), motors_enabled_ ? "on" : "off", true_pose_.x, true_pose_.y, true_pose_.yaw, v_mps_,
-                w_radps_, static_cast<unsigned long long>(packets_received_),
-                static_cast<unsigned long long>(sips_sent_), static_cast<unsigned long long>(sessions_opened_),
-                watchdog_tripped_ ? " watchdog" : "");
+  std::snprintf(
+      buf, sizeof(buf), "state %s motors %s pose %.3f %.3f %.4f v %.3f w %.3f packets %llu sips %llu sessions %llu%s",
+      toString(state_), motors_enabled_ ? "on" : "off", true_pose_.x, true_pose_.y, true_pose_.yaw, v_mps_, w_radps_,
+      static_cast<unsigned long long>(packets_received_), static_cast<unsigned long long>(sips_sent_),
+      static_cast<unsigned long long>(sessions_opened_), watchdog_tripped_ ? " watchdog" : "");
   return buf;
 }
 
@@ -281,9 +297,10 @@ std::string RobotEmulator::command(const std::string& line, double t) {
   } else if (name == "status") {
     return statusLine();
   } else {
-    throw std::invalid_argument("emulator command '" + line +
-                                "' not understood (corrupt N, drop N, garbage N, silence S, disconnect S, stall on|off, "
-                                "encoder on|off, motors on|off, bump front|rear|off, still_open, battery V, status)");
+    throw std::invalid_argument(
+        "emulator command '" + line +
+        "' not understood (corrupt N, drop N, garbage N, silence S, disconnect S, stall on|off, "
+        "encoder on|off, motors on|off, bump front|rear|off, still_open, battery V, status)");
   }
   return "ok " + line;
 }

@@ -212,14 +212,17 @@ class DriverOnEmulator : public ::testing::Test {
     config.reconnect_period_s = 0.2;
     driver_ = std::make_unique<PioneerDriver>(config);
     driver_->start();
-    for (int i = 0; i < 100 && !driver_->status().have_sip; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    for (int i = 0; i < 100 && !driver_->status().have_sip; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
     ASSERT_TRUE(driver_->status().have_sip) << driver_->status().last_error;
   }
   void TearDown() override {
     driver_->stop();
     emu_->stop();
   }
-  scanstop::Pose2D truth() { return emu_->with([](RobotEmulator& e) { return e.truePose(); }); }
+  scanstop::Pose2D truth() {
+    return emu_->with([](RobotEmulator& e) { return e.truePose(); });
+  }
   std::unique_ptr<PtyEmulator> emu_;
   std::unique_ptr<PioneerDriver> driver_;
 };
@@ -355,7 +358,8 @@ TEST(DriverConfigChecks, MotionSpeedsMustStayWithinTheSpeedBounds) {
     ADD_FAILURE() << "accepted motion/linear_speed above max_linear_speed";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("'motion/linear_speed_mps' = 0.8 m/s is out of range [0.01, 0.5 m/s]"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
   c = DriverConfig();
   c.port = "/dev/null";

@@ -8,11 +8,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdio>
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
-#include <iostream>
 #include <fstream>
+#include <iostream>
 #include <string>
 
 #include "scanstop_common/fuzz_finding.h"
@@ -53,8 +53,8 @@ TEST(SipFuzz, BoundedRunFindsNoCrash) {
   const std::string log = dir + "/fuzz.log";
   const std::string command = std::string(SIP_FUZZER) + " -runs=" + std::to_string(runs_wanted) +
                               " -max_total_time=" + std::to_string(seconds) +
-                              " -seed=1 -timeout=5 -rss_limit_mb=1024 -max_len=512 -artifact_prefix=" + dir + "/ " + corpus +
-                              " > " + log + " 2>&1";
+                              " -seed=1 -timeout=5 -rss_limit_mb=1024 -max_len=512 -artifact_prefix=" + dir + "/ " +
+                              corpus + " > " + log + " 2>&1";
   const int status = std::system(command.c_str());
   std::ifstream in(log);
   const std::string output((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

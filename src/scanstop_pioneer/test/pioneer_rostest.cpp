@@ -14,8 +14,8 @@
 
 #include <atomic>
 #include <cmath>
-#include <limits>
 #include <future>
+#include <limits>
 #include <mutex>
 
 #include "scanstop_pioneer/pioneer_driver_node.h"
@@ -42,9 +42,12 @@ struct OdomWatch {
     const auto& p = m->pose.pose.position;
     const auto& q = m->pose.pose.orientation;
     const double qn = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-    if (m->header.frame_id != "odom" || m->child_frame_id != "base_link") problem = "wrong frames";
-    else if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(qn) || std::abs(qn - 1.0) > 1e-6) problem = "non-finite or unnormalised pose";
-    else if (std::abs(m->twist.twist.linear.x) > 0.6 || std::abs(m->twist.twist.angular.z) > 1.5) problem = "implausible velocity";
+    if (m->header.frame_id != "odom" || m->child_frame_id != "base_link")
+      problem = "wrong frames";
+    else if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(qn) || std::abs(qn - 1.0) > 1e-6)
+      problem = "non-finite or unnormalised pose";
+    else if (std::abs(m->twist.twist.linear.x) > 0.6 || std::abs(m->twist.twist.angular.z) > 1.5)
+      problem = "implausible velocity";
     if (count > 0 && problem.empty()) {
       const double step = std::hypot(p.x - last.pose.pose.position.x, p.y - last.pose.pose.position.y);
       max_step = std::max(max_step, step);
@@ -249,13 +252,15 @@ TEST(PioneerDriver, C2_BadRequestsAreRefusedAndMoveNothing) {
     const auto r = rotate(a);
     EXPECT_FALSE(r.response.success) << a;
     EXPECT_NE(r.response.message.find("angle_rad = "), std::string::npos) << r.response.message;
-    EXPECT_NE(r.response.message.find("must be finite and within [-6.283, 6.283]"), std::string::npos) << r.response.message;
+    EXPECT_NE(r.response.message.find("must be finite and within [-6.283, 6.283]"), std::string::npos)
+        << r.response.message;
   }
   for (double d : {100.0, -5.5, std::nan(""), -std::numeric_limits<double>::infinity()}) {
     const auto f = forward(d);
     EXPECT_FALSE(f.response.success) << d;
     EXPECT_NE(f.response.message.find("distance_m = "), std::string::npos) << f.response.message;
-    EXPECT_NE(f.response.message.find("must be finite and within [-5.000, 5.000]"), std::string::npos) << f.response.message;
+    EXPECT_NE(f.response.message.find("must be finite and within [-5.000, 5.000]"), std::string::npos)
+        << f.response.message;
   }
   ros::WallDuration(0.5).sleep();
   const auto after = g_odom->latest();
@@ -349,7 +354,8 @@ TEST(PioneerDriver, I_SilenceDuringAMotionIsReportedAndRecovered) {
   auto call = std::async(std::launch::async, [] { return forward(1.0); });
   ros::WallDuration(1.0).sleep();
   inject("silence 3");
-  ASSERT_EQ(call.wait_for(std::chrono::seconds(6)), std::future_status::ready) << "forward hung after the robot fell silent";
+  ASSERT_EQ(call.wait_for(std::chrono::seconds(6)), std::future_status::ready)
+      << "forward hung after the robot fell silent";
   const auto f = call.get();
   EXPECT_FALSE(f.response.success);
   EXPECT_FALSE(f.response.collision);

@@ -14,9 +14,9 @@ using Bytes = std::vector<uint8_t>;
 Bytes payloadOf(const Bytes& packet) { return Bytes(packet.begin() + 3, packet.end() - 2); }
 
 // The example SIP of PROTOCOL_FACTS 2.5 (checksum verified there).
-const Bytes kExampleSip{0xFA, 0xFB, 0x21, 0x33, 0xE8, 0x03, 0xF0, 0x7F, 0x00, 0x04, 0x64, 0x00, 0x78, 0x00,
-                        0x7D, 0x00, 0x00, 0x00, 0x04, 0x01, 0x00, 0x00, 0x02, 0x00, 0x4A, 0x07, 0x01, 0x93,
-                        0x0E, 0x00, 0x00, 0x00, 0x00, 0x00, 0x57, 0x90};
+const Bytes kExampleSip{0xFA, 0xFB, 0x21, 0x33, 0xE8, 0x03, 0xF0, 0x7F, 0x00, 0x04, 0x64, 0x00,
+                        0x78, 0x00, 0x7D, 0x00, 0x00, 0x00, 0x04, 0x01, 0x00, 0x00, 0x02, 0x00,
+                        0x4A, 0x07, 0x01, 0x93, 0x0E, 0x00, 0x00, 0x00, 0x00, 0x00, 0x57, 0x90};
 
 TEST(Protocol, CommandPacketsMatchTheWorkedExamples) {
   EXPECT_EQ(commandPacket(cmd::kSync0), (Bytes{0xFA, 0xFB, 0x03, 0x00, 0x00, 0x00}));
@@ -47,8 +47,8 @@ TEST(Protocol, ChecksumPairsAndOddByte) {
 }
 
 TEST(Protocol, Sync2ReplyMatchesTheWorkedExample) {
-  const Bytes expected{0xFA, 0xFB, 0x16, 0x02, 0x4D, 0x79, 0x42, 0x6F, 0x74, 0x00, 0x50, 0x69, 0x6F, 0x6E,
-                       0x65, 0x65, 0x72, 0x00, 0x70, 0x32, 0x64, 0x78, 0x00, 0xD3, 0x6D};
+  const Bytes expected{0xFA, 0xFB, 0x16, 0x02, 0x4D, 0x79, 0x42, 0x6F, 0x74, 0x00, 0x50, 0x69, 0x6F,
+                       0x6E, 0x65, 0x65, 0x72, 0x00, 0x70, 0x32, 0x64, 0x78, 0x00, 0xD3, 0x6D};
   EXPECT_EQ(framePacket(encodeSync2Reply({"MyBot", "Pioneer", "p2dx"})), expected);
   SyncInfo info;
   const Bytes payload = payloadOf(expected);
@@ -132,7 +132,7 @@ TEST(Protocol, ParserResynchronisesAfterGarbageDroppedBytesAndBadChecksums) {
   Bytes broken = kExampleSip;
   broken[10] ^= 0xFF;  // bad checksum
   Bytes dropped = kExampleSip;
-  dropped.erase(dropped.begin() + 15);  // one byte lost
+  dropped.erase(dropped.begin() + 15);      // one byte lost
   Bytes bad_count{0xFA, 0xFB, 0xF0, 0x01};  // count 240 > 200
   for (const Bytes* b : std::vector<const Bytes*>{&vel, &broken, &dropped, &bad_count, &kExampleSip})
     stream.insert(stream.end(), b->begin(), b->end());
@@ -174,12 +174,12 @@ TEST(Protocol, DecodeCommandArguments) {
 }
 
 TEST(Odometry, FifteenBitWrapAround) {
-  EXPECT_EQ(wrapDelta15(10, 0x7FF0), 0x1A);       // forward across the wrap
-  EXPECT_EQ(wrapDelta15(0x7FF0, 10), -0x1A);      // backward across the wrap
-  EXPECT_EQ(wrapDelta15(0x1000, 0), 0x1000);      // exactly the limit is no wrap
+  EXPECT_EQ(wrapDelta15(10, 0x7FF0), 0x1A);   // forward across the wrap
+  EXPECT_EQ(wrapDelta15(0x7FF0, 10), -0x1A);  // backward across the wrap
+  EXPECT_EQ(wrapDelta15(0x1000, 0), 0x1000);  // exactly the limit is no wrap
   EXPECT_EQ(wrapDelta15(0x1001, 0), 0x1001 - 0x8000);
   EXPECT_EQ(wrapDelta15(0, 0x1001), 0x8000 - 0x1001);
-  EXPECT_EQ(wrapDelta15(0xFFFF, 0x7FFF), 0);      // bit 15 is ignored
+  EXPECT_EQ(wrapDelta15(0xFFFF, 0x7FFF), 0);  // bit 15 is ignored
 }
 
 TEST(Odometry, IntegratesAcrossTheWrapWithConversionFactors) {
@@ -218,7 +218,7 @@ TEST(Odometry, RebaseKeepsTheOdomFrameContinuous) {
   OdometryIntegrator odo{RobotParams()};
   odo.rebase(scanstop::Pose2D(1.0, 2.0, M_PI / 2));
   Sip s;
-  s.x = 5000;  // the robot's own counters after a restart are arbitrary
+  s.x = 5000;   // the robot's own counters after a restart are arbitrary
   s.th = 2048;  // pi
   odo.update(s);
   EXPECT_NEAR(odo.pose().x, 1.0, 1e-9);

@@ -2,10 +2,10 @@
 //
 //   sim_bench [--world FILE.stl]... [--pose x,y,yaw] [--planes N] [--repeat R] [--mixed-pixels]
 //     With --mixed-pixels both simulated scans model mixed pixels (scanner/mixed_pixels, issue #20;
-//     the bare Embree loop stays one ray per beam). For each world (default: the turtlebot3 house from the shared data and worlds/room_10x8.stl),
-//     at the world's documented start pose (or --pose, world frame [m, m, rad]): times Simulator::scan (perfect profile without the
-//     outlier filter = ray casting only; thesis profile with the filter = everything the node
-//     does), a bare Embree loop (rtcIntersect1 per ray, no error model) over exactly the same rays,
+//     the bare Embree loop stays one ray per beam). For each world (default: the turtlebot3 house from the shared data
+//     and worlds/room_10x8.stl), at the world's documented start pose (or --pose, world frame [m, m, rad]): times
+//     Simulator::scan (perfect profile without the outlier filter = ray casting only; thesis profile with the filter =
+//     everything the node does), a bare Embree loop (rtcIntersect1 per ray, no error model) over exactly the same rays,
 //     each with one thread and with all OpenMP threads, and the in-process part of the service:
 //     scan -> PointCloud2 (ros_conv::toMsg) -> TakeScan response serialized and deserialized with
 //     ros::serialization. Prints medians (and minima) over R interleaved repetitions after one
@@ -25,8 +25,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
-#include <limits>
 #include <iostream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -149,13 +149,14 @@ size_t bareLoop(RTCScene scene, const Rays& rays, std::vector<float>& ranges) {
 int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_text, int planes, int repeat,
                 bool mixed_pixels) {
   const int max_threads = omp_get_max_threads();
-  std::printf("sim_bench: %d planes x 682 beams = %d rays per scan, median (min) of %d interleaved runs after a warm-up, "
-              "OpenMP threads: 1 and %d, mixed pixels %s\n\n",
-              planes, planes * 682, repeat, max_threads, mixed_pixels ? "on" : "off");
-  std::printf("%-22s %3s %14s %14s %14s %14s %7s %7s\n", "world", "thr", "bare Embree", "scan perfect",
-              "scan thesis", "+PointCloud2", "perf/", "thes/");
-  std::printf("%-22s %3s %14s %14s %14s %14s %7s %7s\n", "", "", "[ms]", "(no filter)", "(+filter)",
-              "+serialize", "bare", "bare");
+  std::printf(
+      "sim_bench: %d planes x 682 beams = %d rays per scan, median (min) of %d interleaved runs after a warm-up, "
+      "OpenMP threads: 1 and %d, mixed pixels %s\n\n",
+      planes, planes * 682, repeat, max_threads, mixed_pixels ? "on" : "off");
+  std::printf("%-22s %3s %14s %14s %14s %14s %7s %7s\n", "world", "thr", "bare Embree", "scan perfect", "scan thesis",
+              "+PointCloud2", "perf/", "thes/");
+  std::printf("%-22s %3s %14s %14s %14s %14s %7s %7s\n", "", "", "[ms]", "(no filter)", "(+filter)", "+serialize",
+              "bare", "bare");
   std::vector<std::string> notes;
   for (const std::string& path : worlds) {
     const scanstop::Pose2D start = pose_text.empty() ? startPoseFor(path) : scanstop::parsePose2D(pose_text);
@@ -195,25 +196,26 @@ int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_
           std::exit(1);
         }
       };
-      const std::vector<Stat> t = timeInterleaved(
-          repeat, {[&] { bare_hits = bareLoop(perfect.world().scene(), rays, work); },
-                   [&] {
-                     const scanstop::sim::ScanOutput s = perfect.scan(planes);
-                     perfect_valid = s.valid_points;
-                     perfect_mixed = s.mixed_pixels;
-                     perfect_candidates = s.mixed_pixel_candidates;
-                   },
-                   [&] { thesis_valid = thesis.scan(planes).valid_points; }, serviceSide});
+      const std::vector<Stat> t =
+          timeInterleaved(repeat, {[&] { bare_hits = bareLoop(perfect.world().scene(), rays, work); },
+                                   [&] {
+                                     const scanstop::sim::ScanOutput s = perfect.scan(planes);
+                                     perfect_valid = s.valid_points;
+                                     perfect_mixed = s.mixed_pixels;
+                                     perfect_candidates = s.mixed_pixel_candidates;
+                                   },
+                                   [&] { thesis_valid = thesis.scan(planes).valid_points; }, serviceSide});
       const Stat &bare = t[0], &sp = t[1], &st = t[2], &ser = t[3];
       std::printf("%-22s %3d %7.2f (%4.1f) %7.2f (%4.1f) %7.2f (%4.1f) %7.2f (%4.1f) %7.2f %7.2f\n", name.c_str(),
-                  threads, bare.median_ms, bare.min_ms, sp.median_ms, sp.min_ms, st.median_ms, st.min_ms,
-                  ser.median_ms, ser.min_ms, sp.median_ms / bare.median_ms, st.median_ms / bare.median_ms);
+                  threads, bare.median_ms, bare.min_ms, sp.median_ms, sp.min_ms, st.median_ms, st.min_ms, ser.median_ms,
+                  ser.min_ms, sp.median_ms / bare.median_ms, st.median_ms / bare.median_ms);
     }
     // The parts of the service after the scan, each alone (all threads).
     {
       const scanstop::sim::ScanOutput s = thesis.scan(planes);
       scanstop_msgs::TakeScan::Response res;
-      const Stat to_msg = timeIt(repeat, [&] { res.cloud = scanstop::ros_conv::toMsg(s.cloud, "base_link", ros::Time(1, 0)); });
+      const Stat to_msg =
+          timeIt(repeat, [&] { res.cloud = scanstop::ros_conv::toMsg(s.cloud, "base_link", ros::Time(1, 0)); });
       ros::SerializedMessage m;
       const Stat ser = timeIt(repeat, [&] { m = ros::serialization::serializeServiceResponse(true, res); });
       const Stat deser = timeIt(repeat, [&] {
@@ -227,10 +229,11 @@ int benchWorlds(const std::vector<std::string>& worlds, const std::string& pose_
       notes.push_back(parts);
     }
     char buf[256];
-    std::snprintf(buf, sizeof(buf), "%s: %zu triangles, start %s; bare hits %zu, valid points perfect %u, thesis %u; "
+    std::snprintf(buf, sizeof(buf),
+                  "%s: %zu triangles, start %s; bare hits %zu, valid points perfect %u, thesis %u; "
                   "mixed pixels (perfect) %u of %u candidates; response %.1f MB",
-                  name.c_str(), perfect.world().mesh().faces.size(), start.toString().c_str(), bare_hits,
-                  perfect_valid, thesis_valid, perfect_mixed, perfect_candidates, bytes / 1e6);
+                  name.c_str(), perfect.world().mesh().faces.size(), start.toString().c_str(), bare_hits, perfect_valid,
+                  thesis_valid, perfect_mixed, perfect_candidates, bytes / 1e6);
     notes.push_back(buf);
   }
   std::printf("\n");
@@ -263,10 +266,11 @@ int benchService(int planes, int repeat, int argc, char** argv) {
     valid = srv.response.counts.valid_points;
   }
   std::sort(ms.begin(), ms.end());
-  std::printf("sim_bench --service: %s, %d planes: round trip median %.1f ms, min %.1f ms, max %.1f ms over %d calls "
-              "(persistent connection, after a warm-up); cloud %.1f MB, %u valid points\n",
-              nh.resolveName("scanner/take_scan").c_str(), planes, ms[ms.size() / 2], ms.front(), ms.back(), repeat,
-              bytes / 1e6, valid);
+  std::printf(
+      "sim_bench --service: %s, %d planes: round trip median %.1f ms, min %.1f ms, max %.1f ms over %d calls "
+      "(persistent connection, after a warm-up); cloud %.1f MB, %u valid points\n",
+      nh.resolveName("scanner/take_scan").c_str(), planes, ms[ms.size() / 2], ms.front(), ms.back(), repeat,
+      bytes / 1e6, valid);
   return 0;
 }
 
@@ -301,7 +305,8 @@ int main(int argc, char** argv) {
       int n = static_cast<int>(ros_args.size());
       return benchService(planes, repeat, n, ros_args.data());
     }
-    if (worlds.empty()) worlds = {SCANSTOP_SHARED_DATA_DIR "/worlds/turtlebot3_house.stl", SCANSTOP_WORLDS_DIR "/room_10x8.stl"};
+    if (worlds.empty())
+      worlds = {SCANSTOP_SHARED_DATA_DIR "/worlds/turtlebot3_house.stl", SCANSTOP_WORLDS_DIR "/room_10x8.stl"};
     return benchWorlds(worlds, pose_text, planes, repeat, mixed_pixels);
   } catch (const std::exception& e) {
     std::cerr << "sim_bench: " << e.what() << "\n";

@@ -51,10 +51,14 @@ Eigen::Vector3d corner(const YAML::Node& n, const std::string& source, const std
 
 const char* materialName(Material m) {
   switch (m) {
-    case Material::Diffuse: return "diffuse";
-    case Material::Retroreflective: return "retroreflective";
-    case Material::Absorbing: return "absorbing";
-    case Material::Glass: return "glass";
+    case Material::Diffuse:
+      return "diffuse";
+    case Material::Retroreflective:
+      return "retroreflective";
+    case Material::Absorbing:
+      return "absorbing";
+    case Material::Glass:
+      return "glass";
   }
   return "?";
 }
@@ -72,7 +76,8 @@ MaterialMap parseMaterials(const std::string& text, const std::string& source) {
     throw MaterialsError(source, "no 'regions' list (expected 'regions:' followed by entries with material, min, max)");
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
-    if (key != "regions") throw MaterialsError(source, "unknown key '" + key + "'" + lineOf(kv.first) + " (only 'regions')");
+    if (key != "regions")
+      throw MaterialsError(source, "unknown key '" + key + "'" + lineOf(kv.first) + " (only 'regions')");
   }
   const YAML::Node regions = root["regions"];
   if (regions.IsNull()) return map;  // `regions:` with nothing: every surface diffuse
@@ -96,12 +101,17 @@ MaterialMap parseMaterials(const std::string& text, const std::string& source) {
                                          " (known: name, material, min, max, bias_m, reflect_probability)");
     }
     const YAML::Node m = e["material"];
-    if (!m) throw MaterialsError(source, where + ": 'material' is missing (diffuse, retroreflective, absorbing, glass)");
+    if (!m)
+      throw MaterialsError(source, where + ": 'material' is missing (diffuse, retroreflective, absorbing, glass)");
     const std::string mat = m.IsScalar() ? m.as<std::string>() : std::string("<not a string>");
-    if (mat == "diffuse") r.material = Material::Diffuse;
-    else if (mat == "retroreflective") r.material = Material::Retroreflective;
-    else if (mat == "absorbing") r.material = Material::Absorbing;
-    else if (mat == "glass") r.material = Material::Glass;
+    if (mat == "diffuse")
+      r.material = Material::Diffuse;
+    else if (mat == "retroreflective")
+      r.material = Material::Retroreflective;
+    else if (mat == "absorbing")
+      r.material = Material::Absorbing;
+    else if (mat == "glass")
+      r.material = Material::Glass;
     else
       throw MaterialsError(source, where + ": unknown material '" + mat + "'" + lineOf(m) +
                                        " (one of diffuse, retroreflective, absorbing, glass)");
@@ -109,11 +119,12 @@ MaterialMap parseMaterials(const std::string& text, const std::string& source) {
     r.max = corner(e["max"], source, where + ": 'max'");
     for (int a = 0; a < 3; ++a)
       if (r.min[a] > r.max[a])
-        throw MaterialsError(source, where + ": min " + vec(r.min) + " > max " + vec(r.max) + " in " +
-                                         std::string(1, "xyz"[a]));
+        throw MaterialsError(
+            source, where + ": min " + vec(r.min) + " > max " + vec(r.max) + " in " + std::string(1, "xyz"[a]));
     if (const YAML::Node n = e["bias_m"]) {
       if (r.material != Material::Retroreflective)
-        throw MaterialsError(source, where + ": 'bias_m'" + lineOf(n) + " is for retroreflective regions only, this one is " +
+        throw MaterialsError(source, where + ": 'bias_m'" + lineOf(n) +
+                                         " is for retroreflective regions only, this one is " +
                                          materialName(r.material));
       r.bias_m = number(n, source, where + ": 'bias_m'");
       if (r.bias_m < 0.0 || r.bias_m > 1.0)
@@ -121,12 +132,12 @@ MaterialMap parseMaterials(const std::string& text, const std::string& source) {
     }
     if (const YAML::Node n = e["reflect_probability"]) {
       if (r.material != Material::Glass)
-        throw MaterialsError(source, where + ": 'reflect_probability'" + lineOf(n) + " is for glass regions only, this one is " +
-                                         materialName(r.material));
+        throw MaterialsError(source, where + ": 'reflect_probability'" + lineOf(n) +
+                                         " is for glass regions only, this one is " + materialName(r.material));
       r.reflect_probability = number(n, source, where + ": 'reflect_probability'");
       if (r.reflect_probability < 0.0 || r.reflect_probability > 1.0)
-        throw MaterialsError(source, where + ": 'reflect_probability' = " + num(r.reflect_probability) +
-                                         " is out of range [0, 1]");
+        throw MaterialsError(
+            source, where + ": 'reflect_probability' = " + num(r.reflect_probability) + " is out of range [0, 1]");
     }
     map.regions.push_back(r);
   }

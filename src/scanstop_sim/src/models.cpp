@@ -10,7 +10,7 @@ namespace scanstop {
 namespace sim {
 
 Eigen::Vector3f ScannerConfig::direction(int plane, int planes, int beam) const {
-  const double phi = M_PI * plane / planes;  // plane turn about z
+  const double phi = M_PI * plane / planes;                                             // plane turn about z
   const double theta = (first_step + beam - front_step) * 2.0 * M_PI / steps_per_turn;  // from +z
   const double h = std::sin(theta);
   return Eigen::Vector3f(static_cast<float>(h * std::cos(phi)), static_cast<float>(h * std::sin(phi)),
@@ -36,9 +36,9 @@ void ScannerConfig::validate(const std::string& p) const {
   requireInRange(p + "mixed_pixel_threshold_m", mixed_pixel_threshold_m, 0.005, 1.0, "m");
   requireInRange(p + "mixed_pixel_samples", mixed_pixel_samples, 2, 8);
   if (first_step < 0 || last_step <= first_step || last_step >= steps_per_turn)
-    throw ConfigError(p + "first_step = " + std::to_string(first_step) + ", " + p + "last_step = " +
-                      std::to_string(last_step) + ": need 0 <= first_step < last_step < steps_per_turn (" +
-                      std::to_string(steps_per_turn) + ")");
+    throw ConfigError(p + "first_step = " + std::to_string(first_step) + ", " + p +
+                      "last_step = " + std::to_string(last_step) +
+                      ": need 0 <= first_step < last_step < steps_per_turn (" + std::to_string(steps_per_turn) + ")");
 }
 
 void SensorNoiseConfig::validate(const std::string& p) const {
@@ -46,7 +46,8 @@ void SensorNoiseConfig::validate(const std::string& p) const {
   requireInRange(p + "p_random", p_random, 0.0, 1.0);
   requireInRange(p + "p_max", p_max, 0.0, 1.0);
   if (p_hit + p_random + p_max <= 0.0)
-    throw ConfigError("parameters '" + p + "p_hit' + '" + p + "p_random' + '" + p + "p_max' = 0: their sum must be > 0");
+    throw ConfigError("parameters '" + p + "p_hit' + '" + p + "p_random' + '" + p +
+                      "p_max' = 0: their sum must be > 0");
   requireInRange(p + "sigma_near_m", sigma_near_m, 0.0, 1.0, "m");
   requireInRange(p + "sigma_far_rel", sigma_far_rel, 0.0, 1.0);
   requireInRange(p + "p_plane_loss", p_plane_loss, 0.0, 1.0);

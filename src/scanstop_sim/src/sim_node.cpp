@@ -2,8 +2,8 @@
 
 #include <nav_msgs/Odometry.h>
 #include <rosgraph_msgs/Clock.h>
-#include <tf2_msgs/TFMessage.h>
 #include <scanstop_msgs/Progress.h>
+#include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/Marker.h>
 
 #include <cmath>
@@ -57,7 +57,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   }
   int seed = 1;
   params.optional("seed", seed);
-  if (seed < 0) throw ConfigError("parameter '" + pnh.resolveName("seed") + "' = " + std::to_string(seed) + " must be >= 0");
+  if (seed < 0)
+    throw ConfigError("parameter '" + pnh.resolveName("seed") + "' = " + std::to_string(seed) + " must be >= 0");
   config.seed = static_cast<uint64_t>(seed);
   // Every model field can be overridden by a parameter of the same name (config/sim.yaml).
   ScannerConfig& sc = config.scanner;
@@ -124,8 +125,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   }
   params.optional("motion_time_scale", motion_time_scale_);
   if (!(motion_time_scale_ >= 0.0 && motion_time_scale_ <= 10.0))
-    throw ConfigError("parameter '" + pnh.resolveName("motion_time_scale") + "' = " + std::to_string(motion_time_scale_) +
-                      " is out of range [0, 10]");
+    throw ConfigError("parameter '" + pnh.resolveName("motion_time_scale") +
+                      "' = " + std::to_string(motion_time_scale_) + " is out of range [0, 10]");
   params.optional("scan_time_scale", scan_time_scale_);
   if (!(scan_time_scale_ >= 0.0 && scan_time_scale_ <= 10.0))
     throw ConfigError("parameter '" + pnh.resolveName("scan_time_scale") + "' = " + std::to_string(scan_time_scale_) +
@@ -140,8 +141,11 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   params.optional("base_frame", base_frame_);
   params.optional("laser_frame", laser_frame_);
   params.optional("odom_as_map", odom_as_map_);
-  params.frames({{"world_frame", world_frame_}, {"map_frame", map_frame_}, {"odom_frame", odom_frame_},
-                                  {"base_frame", base_frame_}, {"laser_frame", laser_frame_}});
+  params.frames({{"world_frame", world_frame_},
+                 {"map_frame", map_frame_},
+                 {"odom_frame", odom_frame_},
+                 {"base_frame", base_frame_},
+                 {"laser_frame", laser_frame_}});
   nh.param("/use_sim_time", publish_clock_, false);
   params.known({"state_file"});  // read below, once the world is loaded
   params.rejectUnknown();        // before the world is loaded: a typo ends the node at once
@@ -153,14 +157,16 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     sim_ = makeSimulator(world_path, world_options, config, start_text, pnh.resolveName("start_pose"), &start);
   } catch (const MaterialsError& e) {
     throw ConfigError("parameter '" + pnh.resolveName("materials_file") + "' = '" + world_options.materials_file + "'" +
-                      (world_options.materials_file.empty() ? " (the world's own materials file)" : "") + ": " + e.what());
+                      (world_options.materials_file.empty() ? " (the world's own materials file)" : "") + ": " +
+                      e.what());
   } catch (const IoError& e) {
     throw ConfigError("parameter '" + pnh.resolveName("world") + "': " + e.what());
   } catch (const std::invalid_argument& e) {
     throw ConfigError(std::string("parameter '") + pnh.resolveName("start_pose") + "': " + e.what());
   }
   ROS_INFO("sim_node: %s (%zu triangles, %zu floor), start %s, profile %s, seed %d", world_path.c_str(),
-           sim_->world().mesh().faces.size(), sim_->world().floorTriangles(), start.toString().c_str(), profile.c_str(), seed);
+           sim_->world().mesh().faces.size(), sim_->world().floorTriangles(), start.toString().c_str(), profile.c_str(),
+           seed);
   const MaterialMap& materials = sim_->world().materials();
   const std::vector<size_t> region_triangles = sim_->world().regionCounts();
   for (size_t r = 0; r < materials.regions.size(); ++r) {
@@ -173,8 +179,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
                region_triangles[r], materialName(m.material));
   }
   if (sc.mixed_pixels)
-    ROS_INFO("sim_node: mixed pixels on (footprint %.5f rad, %dx%d sub-rays, depth step %.3f m)", sc.beam_divergence_rad,
-             sc.mixed_pixel_samples, sc.mixed_pixel_samples, sc.mixed_pixel_threshold_m);
+    ROS_INFO("sim_node: mixed pixels on (footprint %.5f rad, %dx%d sub-rays, depth step %.3f m)",
+             sc.beam_divergence_rad, sc.mixed_pixel_samples, sc.mixed_pixel_samples, sc.mixed_pixel_threshold_m);
   // A restarted sim_node continues the simulation of the one that died (pose, odometry, clock,
   // random sequence): a real robot does not teleport back to its start when its driver restarts.
   params.optional("state_file", state_file_);
@@ -196,7 +202,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 
   if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   odom_pub_ = nh.advertise<nav_msgs::Odometry>("odom", 10, true);
-  tf_connect_pub_ = nh.advertise<tf2_msgs::TFMessage>("/tf", 100, [this](const ros::SingleSubscriberPublisher& pub) { onTfSubscriber(pub); });
+  tf_connect_pub_ = nh.advertise<tf2_msgs::TFMessage>(
+      "/tf", 100, [this](const ros::SingleSubscriberPublisher& pub) { onTfSubscriber(pub); });
   truth_pub_ = nh.advertise<nav_msgs::Odometry>("ground_truth", 10, true);
   clearance_pub_ = nh.advertise<scanstop_msgs::MotionClearance>("ground_truth/clearance", 100);
   scan_pub_ = nh.advertise<sensor_msgs::PointCloud2>("scanner/last_scan", 1, true);
@@ -247,7 +254,8 @@ void SimNode::publishState(bool persist) {
   }
   odom_pub_.publish(odometryMsg(sim_->odometry(), odom_frame_, base_frame_, stamp));
   truth_pub_.publish(odometryMsg(sim_->trueInMap(), map_frame_, base_frame_ + "_truth", stamp));
-  const geometry_msgs::TransformStamped odom_tf = ros_conv::toTransformMsg(sim_->odometry(), odom_frame_, base_frame_, stamp);
+  const geometry_msgs::TransformStamped odom_tf =
+      ros_conv::toTransformMsg(sim_->odometry(), odom_frame_, base_frame_, stamp);
   {
     std::lock_guard<std::mutex> lock(tf_mutex_);
     while (!recent_odom_tf_.empty() && recent_odom_tf_.back().header.stamp >= odom_tf.header.stamp)
@@ -381,7 +389,8 @@ bool SimNode::onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::For
   res.collision = out.collision;
   res.duration_s = out.duration_s;
   res.success = !out.collision;
-  if (out.collision) res.message = "collision after " + std::to_string(out.achieved) + " m: the robot touched an obstacle";
+  if (out.collision)
+    res.message = "collision after " + std::to_string(out.achieved) + " m: the robot touched an obstacle";
   std::lock_guard<std::mutex> lock(mutex_);
   res.odom_pose = ros_conv::toPoseStamped(sim_->odometry(), odom_frame_, now());
   return true;
@@ -481,14 +490,17 @@ bool SimNode::onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::Rese
 void SimNode::placeArmedObstacle(double distance_m) {
   if (!armed_obstacle_) return;
   const Simulator::HiddenObstacle& a = *armed_obstacle_;
-  if (std::abs(distance_m) < a.x - a.radius - sim_->config().robot_radius_m + 0.05) return;  // this motion would not reach it
+  if (std::abs(distance_m) < a.x - a.radius - sim_->config().robot_radius_m + 0.05)
+    return;  // this motion would not reach it
   // In the motion's frame: ahead of the robot on a forward motion, behind it on a backward one.
   const double way = distance_m < 0.0 ? -1.0 : 1.0;
   const Pose2D w = sim_->trueInWorld() * Pose2D(way * a.x, way * a.y, 0.0);
   try {
     sim_->addHiddenObstacle({w.x, w.y, a.radius});
-    ROS_WARN("sim_node: hidden obstacle at (%.3f, %.3f) m in %s, radius %.3f m, %.2f m %s the robot in its way (the "
-             "laser does not see it)", w.x, w.y, world_frame_.c_str(), a.radius, a.x, way < 0.0 ? "behind" : "ahead of");
+    ROS_WARN(
+        "sim_node: hidden obstacle at (%.3f, %.3f) m in %s, radius %.3f m, %.2f m %s the robot in its way (the "
+        "laser does not see it)",
+        w.x, w.y, world_frame_.c_str(), a.radius, a.x, way < 0.0 ? "behind" : "ahead of");
   } catch (const std::exception& e) {
     ROS_WARN("sim_node: the armed hidden obstacle was not placed: %s", e.what());
   }

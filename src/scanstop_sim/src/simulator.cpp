@@ -41,8 +41,8 @@ std::string num(double v) {
   return buf;
 }
 
-constexpr int kMaxSurfacesPerBeam = 16;     ///< glass panes (faces) a beam passes at most
-constexpr float kPassThroughStep = 1e-4f;   ///< [m] past a glass face before the next intersection
+constexpr int kMaxSurfacesPerBeam = 16;    ///< glass panes (faces) a beam passes at most
+constexpr float kPassThroughStep = 1e-4f;  ///< [m] past a glass face before the next intersection
 
 /// The surface that returns a beam: a diffuse or retroreflective surface returns it, an absorbing
 /// one swallows it (no return), glass lets it through (or returns it with its reflect_probability,
@@ -97,8 +97,7 @@ std::string checkForward(double distance_m, double max_forward_m) {
 }
 
 std::string checkStartPose(const Pose2D& pose, const World& world, double robot_radius_m) {
-  if (!pose.isFinite())
-    return "pose (" + num(pose.x) + ", " + num(pose.y) + ", " + num(pose.yaw) + ") is not finite";
+  if (!pose.isFinite()) return "pose (" + num(pose.x) + ", " + num(pose.y) + ", " + num(pose.yaw) + ") is not finite";
   if (std::abs(pose.yaw) > 2.0 * M_PI) return "pose theta = " + num(pose.yaw) + " rad is outside [-2 pi, 2 pi]";
   const Eigen::Vector3f lo = world.minCorner(), hi = world.maxCorner();
   if (pose.x - robot_radius_m < lo.x() || pose.x + robot_radius_m > hi.x() || pose.y - robot_radius_m < lo.y() ||
@@ -159,7 +158,9 @@ void Simulator::reset(const Pose2D& start_in_world, int64_t seed) {
 std::string Simulator::saveState() const {
   std::ostringstream out;
   out.precision(17);
-  const auto pose = [&](const char* name, const Pose2D& p) { out << name << ' ' << p.x << ' ' << p.y << ' ' << p.yaw << '\n'; };
+  const auto pose = [&](const char* name, const Pose2D& p) {
+    out << name << ' ' << p.x << ' ' << p.y << ' ' << p.yaw << '\n';
+  };
   out << "scanstop_sim_state 1\n";
   out << "world " << world_.name() << '\n';
   pose("start", start_);
@@ -178,7 +179,8 @@ void Simulator::restoreState(const std::string& text) {
   std::istringstream in(text);
   std::string line;
   if (!std::getline(in, line) || line != "scanstop_sim_state 1")
-    throw std::invalid_argument("not a sim_node state (first line '" + line.substr(0, 40) + "', expected 'scanstop_sim_state 1')");
+    throw std::invalid_argument("not a sim_node state (first line '" + line.substr(0, 40) +
+                                "', expected 'scanstop_sim_state 1')");
   Pose2D start, truth, odom;
   double clock = -1.0;
   uint64_t counter = 0, seed = 0;
@@ -206,7 +208,8 @@ void Simulator::restoreState(const std::string& text) {
     } else if (key == "odom") {
       readPose(odom, 3);
     } else if (key == "clock") {
-      if (!(ls >> clock) || !std::isfinite(clock) || clock < 0.0) throw std::invalid_argument("field 'clock' is not a time >= 0");
+      if (!(ls >> clock) || !std::isfinite(clock) || clock < 0.0)
+        throw std::invalid_argument("field 'clock' is not a time >= 0");
       have[4] = true;
     } else if (key == "scan_counter") {
       if (!(ls >> counter)) throw std::invalid_argument("field 'scan_counter' is not a count");
@@ -215,11 +218,13 @@ void Simulator::restoreState(const std::string& text) {
       if (!(ls >> seed)) throw std::invalid_argument("field 'seed' is not a number");
       have[6] = true;
     } else if (key == "rng") {
-      if (!(ls >> rng)) throw std::invalid_argument("field 'rng' is not a random generator state of 312 numbers (truncated file?)");
+      if (!(ls >> rng))
+        throw std::invalid_argument("field 'rng' is not a random generator state of 312 numbers (truncated file?)");
       have[7] = true;
     } else if (key == "hidden_obstacle") {
       HiddenObstacle h;
-      if (!(ls >> h.x >> h.y >> h.radius) || !std::isfinite(h.x) || !std::isfinite(h.y) || !(h.radius > 0.0 && h.radius <= 2.0))
+      if (!(ls >> h.x >> h.y >> h.radius) || !std::isfinite(h.x) || !std::isfinite(h.y) ||
+          !(h.radius > 0.0 && h.radius <= 2.0))
         throw std::invalid_argument("field 'hidden_obstacle' is not x y radius (finite, radius in (0, 2] m): '" +
                                     line.substr(0, 80) + "'");
       hidden.push_back(h);
@@ -276,12 +281,14 @@ bool Simulator::bodyCollides(const Eigen::Vector2d& p) const {
 double Simulator::bodyClearance(const Eigen::Vector2d& p) const {
   const double r = config_.robot_radius_m;
   double c = std::max(0.0, world_.clearanceWithin(p, r + kClearanceRange) - r);
-  for (const HiddenObstacle& h : hidden_) c = std::min(c, std::max(0.0, (p - Eigen::Vector2d(h.x, h.y)).norm() - h.radius - r));
+  for (const HiddenObstacle& h : hidden_)
+    c = std::min(c, std::max(0.0, (p - Eigen::Vector2d(h.x, h.y)).norm() - h.radius - r));
   return c;
 }
 
 ScanOutput Simulator::scan(int planes) {
-  if (planes < 1 || planes > 2000) throw std::invalid_argument("planes must be in [1, 2000], got " + std::to_string(planes));
+  if (planes < 1 || planes > 2000)
+    throw std::invalid_argument("planes must be in [1, 2000], got " + std::to_string(planes));
   const ScannerConfig& sc = config_.scanner;
   const int beams = sc.beams();
   ScanOutput out;
@@ -289,7 +296,8 @@ ScanOutput Simulator::scan(int planes) {
   PointCloud& cloud = out.cloud;
   cloud.width = static_cast<uint32_t>(beams);
   cloud.height = static_cast<uint32_t>(planes);
-  cloud.points.assign(static_cast<size_t>(planes) * beams, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  cloud.points.assign(static_cast<size_t>(planes) * beams,
+                      Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
   cloud.ranges.assign(cloud.points.size(), std::numeric_limits<float>::quiet_NaN());
 
   // Which planes are lost in transmission (drawn up front so the result does not depend on threads).
@@ -320,12 +328,14 @@ ScanOutput Simulator::scan(int planes) {
     origin_world[p] = T_world_base * origin_base[p];
   }
   const auto dirBase = [&](int p, int b) {
-    return Eigen::Vector3f(static_cast<float>(beam_sin[b] * plane_cos[p]), static_cast<float>(beam_sin[b] * plane_sin[p]),
-                           static_cast<float>(beam_cos[b]));
+    return Eigen::Vector3f(static_cast<float>(beam_sin[b] * plane_cos[p]),
+                           static_cast<float>(beam_sin[b] * plane_sin[p]), static_cast<float>(beam_cos[b]));
   };
   // Random streams per plane, independent of the thread that runs it: the range noise (as before
   // materials existed), glass reflections of the centre rays, those of mixed-pixel sub-rays.
-  const auto planeRng = [&](uint64_t salt, int p) { return std::mt19937_64(scan_seed ^ (salt * static_cast<uint64_t>(p + 1))); };
+  const auto planeRng = [&](uint64_t salt, int p) {
+    return std::mt19937_64(scan_seed ^ (salt * static_cast<uint64_t>(p + 1)));
+  };
   constexpr uint64_t kNoiseSalt = 0x9E3779B97F4A7C15ull, kGlassSalt = 0xD1B54A32D192ED03ull,
                      kSubRaySalt = 0x8CB92BA72F3D8DD7ull;
   const SensorNoiseConfig& noise = config_.errors.sensor;

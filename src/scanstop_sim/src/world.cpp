@@ -76,8 +76,10 @@ void World::setMaterials(const MaterialMap& materials) {
   if (materials_.regions.empty()) return;
   face_region_.assign(mesh_.faces.size(), -1);
   for (size_t f = 0; f < mesh_.faces.size(); ++f) {
-    const Eigen::Vector3d c = ((mesh_.vertices[mesh_.faces[f][0]] + mesh_.vertices[mesh_.faces[f][1]] +
-                                mesh_.vertices[mesh_.faces[f][2]]) / 3.0f).cast<double>();
+    const Eigen::Vector3d c =
+        ((mesh_.vertices[mesh_.faces[f][0]] + mesh_.vertices[mesh_.faces[f][1]] + mesh_.vertices[mesh_.faces[f][2]]) /
+         3.0f)
+            .cast<double>();
     for (size_t r = 0; r < materials_.regions.size(); ++r)
       if (materials_.regions[r].contains(c)) {
         face_region_[f] = static_cast<int>(r);
@@ -107,7 +109,8 @@ World World::fromMesh(const TriangleMesh& mesh, const std::string& name, const W
   }
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     bool flat = true;
-    for (int k = 0; k < 3; ++k) flat = flat && std::abs(mesh.vertices[mesh.faces[f][k]].z()) <= options.floor_tolerance_m;
+    for (int k = 0; k < 3; ++k)
+      flat = flat && std::abs(mesh.vertices[mesh.faces[f][k]].z()) <= options.floor_tolerance_m;
     if (flat && mesh.faceNormal(f).norm() > 0.5f) ++w.floor_triangles_;
   }
   if (options.require_floor && w.floor_triangles_ == 0)
@@ -123,9 +126,9 @@ World World::fromMesh(const TriangleMesh& mesh, const std::string& name, const W
   rtcSetSceneBuildQuality(w.embree_->scene, RTC_BUILD_QUALITY_HIGH);
   RTCGeometry geom = rtcNewGeometry(w.embree_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), mesh.vertices.size()));
+                                                         3 * sizeof(float), mesh.vertices.size()));
   auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                             3 * sizeof(unsigned), mesh.faces.size()));
+                                                            3 * sizeof(unsigned), mesh.faces.size()));
   for (size_t i = 0; i < mesh.vertices.size(); ++i)
     for (int k = 0; k < 3; ++k) vb[3 * i + k] = mesh.vertices[i][k];
   for (size_t f = 0; f < mesh.faces.size(); ++f)

@@ -113,10 +113,14 @@ struct Local {
   }
   Eigen::Vector3d at(double u, double v, double z) const {
     switch (back) {
-      case WorldBuilder::Side::North: return {x0 + u, y0 + v, z};
-      case WorldBuilder::Side::South: return {x1 - u, y1 - v, z};
-      case WorldBuilder::Side::East: return {x0 + v, y1 - u, z};
-      case WorldBuilder::Side::West: return {x1 - v, y0 + u, z};
+      case WorldBuilder::Side::North:
+        return {x0 + u, y0 + v, z};
+      case WorldBuilder::Side::South:
+        return {x1 - u, y1 - v, z};
+      case WorldBuilder::Side::East:
+        return {x0 + v, y1 - u, z};
+      case WorldBuilder::Side::West:
+        return {x1 - v, y0 + u, z};
     }
     return {x0 + u, y0 + v, z};
   }
@@ -144,8 +148,8 @@ void WorldBuilder::sofa(double x0, double y0, double x1, double y1, Side back) {
   const double overhang = 0.12, arm = 0.18, recess = 0.15, foot = 0.05;
   for (const double u : {overhang, W - overhang - foot})
     for (const double v : {recess, D - foot}) l.box(*this, u, v, u + foot, v + foot, 0, 0.1);
-  l.box(*this, overhang, recess, W - overhang, D, 0.1, 0.3);   // base
-  l.box(*this, arm, 0, W - arm, D - 0.2, 0.3, 0.45);           // seat, overhanging the base's front
+  l.box(*this, overhang, recess, W - overhang, D, 0.1, 0.3);    // base
+  l.box(*this, arm, 0, W - arm, D - 0.2, 0.3, 0.45);            // seat, overhanging the base's front
   l.box(*this, overhang, D - 0.2, W - overhang, D, 0.3, 0.85);  // back
   // Arms: the underside slopes from 0.3 m at the seat to 0.5 m at the outer edge.
   for (const bool left : {true, false}) {
@@ -179,7 +183,7 @@ void WorldBuilder::bed(double x0, double y0, double x1, double y1, Side head) {
     for (const double v : {0.05, D - 0.1 - leg}) l.box(*this, u, v, u + leg, v + leg, 0, 0.2);
   l.box(*this, 0.05, 0.05, W - 0.05, D - 0.1, 0.2, 0.35);  // frame
   l.box(*this, 0, 0, W, D - 0.05, 0.35, 0.55);             // mattress, overhanging the frame
-  l.box(*this, 0, D - 0.05, W, D, 0, 1.0);                  // headboard
+  l.box(*this, 0, D - 0.05, W, D, 0, 1.0);                 // headboard
 }
 
 void WorldBuilder::coffeeTable(double cx, double cy, double w, double d) {
@@ -209,11 +213,11 @@ WorldSpec room10x8() {
   WorldBuilder b(2.5);
   const double t = WorldBuilder::kWallThickness / 2;
   b.floorAndCeiling(-t - 0.5, -2.2 - t - 0.5, 10 + t + 0.5, 8 + t + 0.5);
-  b.wallX(8 + t, -2 * t, 10 + 2 * t);                      // north
-  b.wallX(-t, -2 * t, 10 + 2 * t, {{0.4, 1.3}});          // south, with the door (0.9 m wide)
-  b.wallY(-t, -2.2 - 2 * t, 8 + 2 * t);                    // west (room and corridor)
-  b.wallY(10 + t, -2.2 - 2 * t, 8 + 2 * t);                // east
-  b.wallX(-2.2 - t, -2 * t, 10 + 2 * t);                   // corridor's south wall
+  b.wallX(8 + t, -2 * t, 10 + 2 * t);             // north
+  b.wallX(-t, -2 * t, 10 + 2 * t, {{0.4, 1.3}});  // south, with the door (0.9 m wide)
+  b.wallY(-t, -2.2 - 2 * t, 8 + 2 * t);           // west (room and corridor)
+  b.wallY(10 + t, -2.2 - 2 * t, 8 + 2 * t);       // east
+  b.wallX(-2.2 - t, -2 * t, 10 + 2 * t);          // corridor's south wall
   // Furniture.
   b.table(6.0, 5.0, 1.6, 0.8);
   b.chair(6.0, 4.2, -M_PI / 2);
@@ -223,9 +227,13 @@ WorldSpec room10x8() {
   b.chair(2.0, 2.2, M_PI);
   b.cabinet(8.9, 6.4, 9.95, 7.95, 1.8);
   b.cabinet(0.05, 6.0, 0.55, 7.5, 1.2);
-  return {"room_10x8", "thesis chapter 8: 10 x 8 x 2.5 m room, door in the south-west corner to a 2 m corridor, "
-                       "two tables with thin legs, four chairs, two cabinets",
-          {10.2, 10.5}, Pose2D(2.0, 5.0, 0.0), b.mesh(), ""};
+  return {"room_10x8",
+          "thesis chapter 8: 10 x 8 x 2.5 m room, door in the south-west corner to a 2 m corridor, "
+          "two tables with thin legs, four chairs, two cabinets",
+          {10.2, 10.5},
+          Pose2D(2.0, 5.0, 0.0),
+          b.mesh(),
+          ""};
 }
 
 WorldSpec officeLoop() {
@@ -239,10 +247,10 @@ WorldSpec officeLoop() {
   b.wallY(0, 0, 14);
   b.wallY(18, 0, 14);
   // Corridor ring between the outer rectangle [3, 15] x [3, 11] and the inner [5, 13] x [5, 9].
-  b.wallX(3, 0, 18, {{1.0, 2.0}, {7.0, 8.0}, {12.0, 13.0}});   // offices south: doors
-  b.wallX(11, 0, 18, {{4.0, 5.0}, {9.0, 10.0}, {15.5, 16.5}}); // offices north
-  b.wallY(3, 3 + t, 11 - t, {{6.5, 7.5}});                    // west office
-  b.wallY(15, 3 + t, 11 - t, {{6.5, 7.5}});                   // east office
+  b.wallX(3, 0, 18, {{1.0, 2.0}, {7.0, 8.0}, {12.0, 13.0}});    // offices south: doors
+  b.wallX(11, 0, 18, {{4.0, 5.0}, {9.0, 10.0}, {15.5, 16.5}});  // offices north
+  b.wallY(3, 3 + t, 11 - t, {{6.5, 7.5}});                      // west office
+  b.wallY(15, 3 + t, 11 - t, {{6.5, 7.5}});                     // east office
   // Central meeting room with one door; the corridor runs around it.
   b.wallX(5, 5, 13, {{8.5, 9.5}});
   b.wallX(9, 5, 13);
@@ -261,7 +269,8 @@ WorldSpec officeLoop() {
   b.table(14.0, 12.5, 1.4, 0.7);
   b.cabinet(0.05, 12.5, 0.6, 13.95, 1.8);
   return {"office_loop", "18 x 14 m office floor: a 2 m corridor loop around a meeting room, offices on all sides",
-          {18.0, 14.0}, Pose2D(4.0, 7.0, M_PI / 2), b.mesh(), ""};
+          {18.0, 14.0},  Pose2D(4.0, 7.0, M_PI / 2),
+          b.mesh(),      ""};
 }
 
 WorldSpec corridor() {
@@ -290,8 +299,9 @@ WorldSpec corridor() {
   // The corridor walls with the room doors (room walls close each room).
   b.wallX(0, 0, 30, south_doors);
   b.wallX(2, 0, 30, north_doors);
-  return {"corridor", "30 x 2 m corridor with six 4 x 4 m side rooms (three each side)", {30.0, 10.0},
-          Pose2D(1.0, 1.0, 0.0), b.mesh(), ""};
+  return {"corridor",   "30 x 2 m corridor with six 4 x 4 m side rooms (three each side)",
+          {30.0, 10.0}, Pose2D(1.0, 1.0, 0.0),
+          b.mesh(),     ""};
 }
 
 /// splitmix64: the same numbers from the same seed on every machine and standard library
@@ -527,14 +537,20 @@ WorldSpec officeLarge() {
     if (kind == 0) {
       f.desk();
       f.shelf();
-      if (rng.chance(0.5)) f.cabinet(); else f.clutter();
+      if (rng.chance(0.5))
+        f.cabinet();
+      else
+        f.clutter();
     } else if (kind == 1) {
       f.diningTable();
       f.diningTable();
       f.shelf();
       f.cabinet();
     } else {
-      if (rng.chance(0.5)) f.desk(); else f.sofa(1.8);
+      if (rng.chance(0.5))
+        f.desk();
+      else
+        f.sofa(1.8);
       f.shelf();
       f.floorLamp();
     }
@@ -577,7 +593,10 @@ WorldSpec officeLarge() {
           "50 x 40 m office floor: two long corridors joined by three cross corridors (two loops), 16 offices "
           "between them, an open-plan area and four labs to the south, ten rooms and a hall to the north (two "
           "passages: a third loop), furniture throughout",
-          {50.0, 40.0}, Pose2D(1.0, 20.0, M_PI / 2), b.mesh(), ""};
+          {50.0, 40.0},
+          Pose2D(1.0, 20.0, M_PI / 2),
+          b.mesh(),
+          ""};
 }
 
 }  // namespace
@@ -666,9 +685,13 @@ WorldSpec furnishedWorld(unsigned seed) {
     }
   return {"furnished_" + std::to_string(seed),
           "furnished flat (seed " + std::to_string(seed) + "): " + std::to_string(cols * rows) + " rooms, " +
-              std::to_string(static_cast<int>(std::lround(X))) + " x " + std::to_string(static_cast<int>(std::lround(Y))) +
+              std::to_string(static_cast<int>(std::lround(X))) + " x " +
+              std::to_string(static_cast<int>(std::lround(Y))) +
               " m, sofas, beds, desks, shelves, tables, lamps, clutter",
-          {X, Y}, start, b.mesh(), ""};
+          {X, Y},
+          start,
+          b.mesh(),
+          ""};
 }
 
 namespace {
@@ -681,13 +704,13 @@ WorldSpec artifactsRoom() {
   WorldBuilder b(2.5);
   const double t = WorldBuilder::kWallThickness / 2;
   b.floorAndCeiling(-t - 0.5, -1.5 - t - 0.5, 6 + t + 0.5, 5 + t + 0.5);
-  b.wallX(5 + t, -2 * t, 6 + 2 * t);                 // north
-  b.wallX(-t, -2 * t, 6 + 2 * t, {{2.5, 3.4}});      // south, with the door
-  b.wallY(-t, -1.5 - 2 * t, 5 + 2 * t);              // west (room and corridor)
-  b.wallY(6 + t, -1.5 - 2 * t, 5 + 2 * t);           // east
-  b.wallX(-1.5 - t, -2 * t, 6 + 2 * t);              // corridor's south wall
-  b.table(4.0, 3.0, 1.2, 0.7);                       // legs at x 3.45 / 4.55, y 2.70 / 3.30
-  b.box({3.75, 3.08, 0.72}, {4.25, 3.13, 1.07});     // the monitor, standing on the table
+  b.wallX(5 + t, -2 * t, 6 + 2 * t);              // north
+  b.wallX(-t, -2 * t, 6 + 2 * t, {{2.5, 3.4}});   // south, with the door
+  b.wallY(-t, -1.5 - 2 * t, 5 + 2 * t);           // west (room and corridor)
+  b.wallY(6 + t, -1.5 - 2 * t, 5 + 2 * t);        // east
+  b.wallX(-1.5 - t, -2 * t, 6 + 2 * t);           // corridor's south wall
+  b.table(4.0, 3.0, 1.2, 0.7);                    // legs at x 3.45 / 4.55, y 2.70 / 3.30
+  b.box({3.75, 3.08, 0.72}, {4.25, 3.13, 1.07});  // the monitor, standing on the table
   b.chair(4.0, 2.3, -M_PI / 2);
   b.cabinet(0.05, 4.0, 0.55, 4.95, 1.2);
   const std::string materials =
@@ -702,16 +725,20 @@ WorldSpec artifactsRoom() {
       "    material: absorbing\n"
       "    min: [3.70, 3.05, 0.73]\n"
       "    max: [4.30, 3.15, 1.10]\n";
-  return {"artifacts_room", "thesis chapter 8 artifacts: 6 x 5 m room, door to a corridor, a table with a retroreflective "
-                            "leg and an absorbing monitor on it, a chair, a cabinet",
-          {6.1, 6.6}, Pose2D(1.5, 2.0, 0.0), b.mesh(), materials};
+  return {"artifacts_room",
+          "thesis chapter 8 artifacts: 6 x 5 m room, door to a corridor, a table with a retroreflective "
+          "leg and an absorbing monitor on it, a chair, a cabinet",
+          {6.1, 6.6},
+          Pose2D(1.5, 2.0, 0.0),
+          b.mesh(),
+          materials};
 }
 
 }  // namespace
 
 std::vector<WorldSpec> buildWorlds() {
-  return {room10x8(), officeLoop(), corridor(), officeLarge(), furnishedWorld(1), furnishedWorld(2), furnishedWorld(3),
-          artifactsRoom()};
+  return {room10x8(),        officeLoop(),      corridor(),        officeLarge(),
+          furnishedWorld(1), furnishedWorld(2), furnishedWorld(3), artifactsRoom()};
 }
 
 Pose2D defaultStartPose(const std::string& world_name) {
@@ -723,9 +750,10 @@ Pose2D defaultStartPose(const std::string& world_name) {
   if (world_name.rfind("furnished_", 0) == 0 && world_name.size() > 10 &&
       world_name.find_first_not_of("0123456789", 10) == std::string::npos && world_name.size() <= 19)
     return furnishedWorld(static_cast<unsigned>(std::stoul(world_name.substr(10)))).start;
-  throw ConfigError("no documented start pose for world '" + world_name +
-                    "' (known: room_10x8, office_loop, corridor, office_large, furnished_<seed>, artifacts_room, turtlebot3_house); "
-                    "give start_pose");
+  throw ConfigError(
+      "no documented start pose for world '" + world_name +
+      "' (known: room_10x8, office_loop, corridor, office_large, furnished_<seed>, artifacts_room, turtlebot3_house); "
+      "give start_pose");
 }
 
 }  // namespace sim

@@ -49,9 +49,9 @@ TEST(World, RayHitsMatchAnalyticDistances) {
   EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {1, 0, 0}, 10.0f), 1.0, 1e-6);
   const Eigen::Vector3f diag = Eigen::Vector3f(1, 0.5f, 0).normalized();
   EXPECT_NEAR(w.castRay({0, 0, 0.5f}, diag, 10.0f), std::sqrt(1.25), 1e-6);  // x = 1 at y = 0.5
-  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {0, 0, -1}, 10.0f), 0.5, 1e-6);         // the floor
-  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {0, 0, 1}, 10.0f), 1.5, 1e-6);          // the ceiling
-  EXPECT_TRUE(std::isinf(w.castRay({0, 0, 0.5f}, {1, 0, 0}, 0.9f)));          // beyond max range
+  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {0, 0, -1}, 10.0f), 0.5, 1e-6);        // the floor
+  EXPECT_NEAR(w.castRay({0, 0, 0.5f}, {0, 0, 1}, 10.0f), 1.5, 1e-6);         // the ceiling
+  EXPECT_TRUE(std::isinf(w.castRay({0, 0, 0.5f}, {1, 0, 0}, 0.9f)));         // beyond max range
   // A single triangle: the hit lies at the analytic plane distance.
   TriangleMesh tri;
   tri.vertices = {{3, -1, 0}, {3, 1, 0}, {3, 0, 2}, {-9, -9, 0}, {9, -9, 0}, {9, 9, 0}};
@@ -87,8 +87,8 @@ TEST(Simulator, PerfectScanInABoxRoomMatchesAnalyticRanges) {
       ASSERT_TRUE(std::isfinite(scan.cloud.ranges[i])) << "plane " << p << " beam " << b;
       EXPECT_NEAR(scan.cloud.ranges[i], expected, 1e-4) << "plane " << p << " beam " << b;
       // The point lies at range along the beam, in base_link.
-      const Eigen::Vector3d pt = config.scanner.origin(p, 50).cast<double>() +
-                                 expected * config.scanner.direction(p, 50, b).cast<double>();
+      const Eigen::Vector3d pt =
+          config.scanner.origin(p, 50).cast<double>() + expected * config.scanner.direction(p, 50, b).cast<double>();
       EXPECT_LT((scan.cloud.points[i].cast<double>() - pt).norm(), 2e-4);
       ++checked;
     }
@@ -139,8 +139,10 @@ TEST(SensorModel, NoiseStatisticsFollowTheThesisSpecification) {
   const int n = 100000;
   for (int i = 0; i < n; ++i) {
     const float v = sampleRange(thesis.sensor, s, 2.0f, rng);
-    if (std::isnan(v)) ++invalid;
-    else if (std::abs(v - 2.0f) > 0.2f) ++random;
+    if (std::isnan(v))
+      ++invalid;
+    else if (std::abs(v - 2.0f) > 0.2f)
+      ++random;
   }
   const double total = thesis.sensor.p_hit + thesis.sensor.p_random + thesis.sensor.p_max;
   EXPECT_NEAR(invalid / double(n), thesis.sensor.p_max / total, 0.003);
@@ -190,9 +192,9 @@ TEST(MotionModel, ThesisProfileMeanAndSpread) {
 TEST(Simulator, EveryMotionReportsTheBodysTrueClearance) {
   WorldBuilder b(2.5);
   b.floorAndCeiling(-5, -5, 5, 5);
-  b.box({2.0, -5, 0}, {2.1, 5, 2.5});   // a wall at x = 2
-  b.box({-5, 0.8, 0}, {5, 0.9, 2.5});   // and one at y = 0.8, along the way
-  SimConfig config;  // perfect motion
+  b.box({2.0, -5, 0}, {2.1, 5, 2.5});  // a wall at x = 2
+  b.box({-5, 0.8, 0}, {5, 0.9, 2.5});  // and one at y = 0.8, along the way
+  SimConfig config;                    // perfect motion
   Simulator sim(World::fromMesh(b.mesh(), "walls"), config, Pose2D(0, 0, 0));
   const double r = config.robot_radius_m;
   // Along y = 0 the side wall stays 0.8 - r away; towards x = 1.5 the end wall comes to 0.5 - r.
@@ -244,7 +246,8 @@ TEST(Simulator, AHiddenObstacleStopsTheRobotButNotTheLaser) {
   const auto rangeAhead = [](const ScanOutput& s) {  // nearest return within 5 cm of the x axis, ahead
     double best = 1e9;
     for (const auto& p : s.cloud.points)
-      if (p.x() > 0.3f && std::abs(p.y()) < 0.1f && std::abs(p.z() - 0.45f) < 0.3f) best = std::min<double>(best, p.x());
+      if (p.x() > 0.3f && std::abs(p.y()) < 0.1f && std::abs(p.z() - 0.45f) < 0.3f)
+        best = std::min<double>(best, p.x());
     return best;
   };
   const double before = rangeAhead(sim.scan(50));
@@ -412,7 +415,8 @@ TEST(Worlds, FurnishedWorldsAreReproducibleVariedAndStartInFreeSpace) {
 TEST(Worlds, RealHouseLoadsAndScans) {
   SimConfig config;
   config.errors = makeProfile("thesis");
-  Simulator sim(World::load(sharedDataPath("worlds/turtlebot3_house.stl")), config, defaultStartPose("turtlebot3_house"));
+  Simulator sim(World::load(sharedDataPath("worlds/turtlebot3_house.stl")), config,
+                defaultStartPose("turtlebot3_house"));
   const ScanOutput s = sim.scan(50);
   // The house has no ceiling: upward beams see nothing; walls, furniture and floor remain.
   EXPECT_GT(s.valid_points, 50u * 682u / 4);
@@ -459,7 +463,6 @@ TEST(Worlds, RealHouseFullScanAtStartPose) {
   EXPECT_GT(checked, 400u);
   EXPECT_EQ(near_surface, checked);
 }
-
 
 // ---- Bad requests (issue 9): each check names what is wrong, the simulator's state is unchanged.
 
@@ -547,7 +550,8 @@ TEST(SimState, ARestoredSimulationContinuesExactlyWhereTheSavedOneStopped) {
   const MotionOutput a_motion = a.forward(0.8);
   const ScanOutput a_scan = a.scan(50);
 
-  Simulator b2(World::fromMesh(b.mesh(), "box"), config, Pose2D(1, 1, 0));  // a fresh node: another start, a fresh generator
+  Simulator b2(World::fromMesh(b.mesh(), "box"), config,
+               Pose2D(1, 1, 0));  // a fresh node: another start, a fresh generator
   b2.restoreState(saved);
   const MotionOutput b_motion = b2.forward(0.8);
   const ScanOutput b_scan = b2.scan(50);
@@ -608,7 +612,8 @@ TEST(ConfigChecks, BadValuesNameTheSimNodeParameter) {
   SimConfig c;
   EXPECT_EQ(message(c, "profiles/thesis/"), "");
   c.scanner.height_m = 7.0;
-  EXPECT_NE(message(c, "").find("'scanner/height_m' = 7 m is out of range [0.05, 3 m]"), std::string::npos) << message(c, "");
+  EXPECT_NE(message(c, "").find("'scanner/height_m' = 7 m is out of range [0.05, 3 m]"), std::string::npos)
+      << message(c, "");
   c = SimConfig();
   c.scanner.plane_time_s = -0.1;
   EXPECT_NE(message(c, "").find("scanner/plane_time_s"), std::string::npos);
@@ -620,7 +625,8 @@ TEST(ConfigChecks, BadValuesNameTheSimNodeParameter) {
   EXPECT_NE(message(c, "profiles/perfect/").find("'profiles/perfect/motion/curvature_per_m' = 3"), std::string::npos);
   c = SimConfig();
   c.errors.motion.linear_speed_mps = 20.0;
-  EXPECT_NE(message(c, "").find("'motion/linear_speed_mps' = 20 m/s is out of range [0.01, 1.5 m/s]"), std::string::npos);
+  EXPECT_NE(message(c, "").find("'motion/linear_speed_mps' = 20 m/s is out of range [0.01, 1.5 m/s]"),
+            std::string::npos);
   c = SimConfig();
   c.max_forward_m = 1000.0;
   EXPECT_NE(message(c, "").find("'max_forward_m' = 1000 m"), std::string::npos);
@@ -745,9 +751,9 @@ TEST(SimArtifacts, AWorldWithoutMaterialsScansAsBefore) {
   // the check is machine-independent (sums recorded here at 2b7f5bd, whose simulator gave the same
   // valid counts as 0d89bfe): the count of valid readings exactly, and the sums of ranges
   // and coordinates over every reading within 5 mm (60,000 readings: last-bit differences of
-  // single-precision ranges add up to well under a millimetre; one reading 1 cm off fails). Thesis profile, seed 7, the documented
-  // start, 100 planes, two scans in a row (the second continues the random sequence). A change here
-  // means every existing scan, test and benchmark figure changed.
+  // single-precision ranges add up to well under a millimetre; one reading 1 cm off fails). Thesis profile, seed 7, the
+  // documented start, 100 planes, two scans in a row (the second continues the random sequence). A change here means
+  // every existing scan, test and benchmark figure changed.
   struct Expected {
     const char* world;
     uint32_t valid[2];
@@ -858,8 +864,8 @@ World worldWithMaterial(const std::string& yaml) {
 
 std::string boxRegion(const std::string& material, const std::string& extra = "") {
   // The box's triangles (centroids above the floor and inside it), not the floor's or the walls'.
-  return "regions:\n  - name: box\n    material: " + material + "\n    min: [1.9, -1.1, 0.01]\n    max: [2.6, 1.6, 1.1]\n" +
-         extra;
+  return "regions:\n  - name: box\n    material: " + material +
+         "\n    min: [1.9, -1.1, 0.01]\n    max: [2.6, 1.6, 1.1]\n" + extra;
 }
 
 float beamAlongX(World world, const SimConfig& config = noiseFree()) {
@@ -896,13 +902,14 @@ TEST(SimArtifacts, MaterialsChangeWhatTheBeamReads) {
 }
 
 TEST(SimArtifacts, ATriangleTakesTheFirstRegionContainingItsCentroid) {
-  const World w = worldWithMaterial(boxRegion("absorbing") + "  - material: retroreflective\n    min: [-10, -10, -1]\n    max: [10, 10, 10]\n");
+  const World w = worldWithMaterial(boxRegion("absorbing") +
+                                    "  - material: retroreflective\n    min: [-10, -10, -1]\n    max: [10, 10, 10]\n");
   const std::vector<size_t> counts = w.regionCounts();
   ASSERT_EQ(counts.size(), 2u);
   EXPECT_EQ(counts[0], 10u);  // the box: 6 faces, 2 triangles each, but its bottom's centroids lie below z = 0.01
   EXPECT_EQ(counts[0] + counts[1], w.mesh().faces.size());
-  EXPECT_TRUE(std::isnan(beamAlongX(
-      worldWithMaterial(boxRegion("absorbing") + "  - material: retroreflective\n    min: [-10, -10, -1]\n    max: [10, 10, 10]\n"))));
+  EXPECT_TRUE(std::isnan(beamAlongX(worldWithMaterial(
+      boxRegion("absorbing") + "  - material: retroreflective\n    min: [-10, -10, -1]\n    max: [10, 10, 10]\n"))));
 }
 
 std::string materialsError(const std::string& yaml) {
@@ -920,7 +927,8 @@ TEST(SimArtifacts, MaterialsFileErrorsNameTheFileTheEntryAndTheProblem) {
   const std::string leg = "  - name: leg\n    material: retroreflective\n    min: [0, 0, 0]\n    max: [1, 1, 1]\n";
   const auto has = [](const std::string& msg, const std::vector<std::string>& parts) {
     for (const auto& p : parts)
-      if (msg.find(p) == std::string::npos) return ::testing::AssertionFailure() << "'" << msg << "' lacks '" << p << "'";
+      if (msg.find(p) == std::string::npos)
+        return ::testing::AssertionFailure() << "'" << msg << "' lacks '" << p << "'";
     return ::testing::AssertionSuccess();
   };
   EXPECT_TRUE(has(materialsError(ok + "  - name: leg\n    material: shiny\n    min: [0, 0, 0]\n    max: [1, 1, 1]\n"),
@@ -931,16 +939,21 @@ TEST(SimArtifacts, MaterialsFileErrorsNameTheFileTheEntryAndTheProblem) {
                   {"room.materials.yaml", "entry 1", "'min'[1]", "not finite"}));
   EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    min: [0, 0]\n    max: [1, 1, 1]\n"),
                   {"entry 1", "'min'", "three numbers"}));
-  EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    max: [1, 1, 1]\n"), {"entry 1", "'min' is missing"}));
+  EXPECT_TRUE(
+      has(materialsError("regions:\n  - material: glass\n    max: [1, 1, 1]\n"), {"entry 1", "'min' is missing"}));
   EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    min: [0, 0, 0]\n    max: [1, 1, abc]\n"),
                   {"entry 1", "'max'[2]", "not a number"}));
   EXPECT_TRUE(has(materialsError("regions:\n" + leg + "    bias: 0.1\n"), {"'leg'", "unknown key 'bias'"}));
-  EXPECT_TRUE(has(materialsError("regions:\n" + leg + "    bias_m: 2\n"), {"'leg'", "'bias_m' = 2 m is out of range [0, 1] m"}));
+  EXPECT_TRUE(has(materialsError("regions:\n" + leg + "    bias_m: 2\n"),
+                  {"'leg'", "'bias_m' = 2 m is out of range [0, 1] m"}));
   EXPECT_TRUE(has(materialsError("regions:\n" + leg + "    reflect_probability: 0.5\n"),
                   {"'leg'", "'reflect_probability'", "glass regions only", "retroreflective"}));
-  EXPECT_TRUE(has(materialsError("regions:\n  - material: glass\n    min: [0, 0, 0]\n    max: [1, 1, 1]\n    reflect_probability: 1.5\n"),
-                  {"entry 1", "'reflect_probability' = 1.5 is out of range [0, 1]"}));
-  EXPECT_TRUE(has(materialsError("regions:\n  - min: [0, 0, 0]\n    max: [1, 1, 1]\n"), {"entry 1", "'material' is missing"}));
+  EXPECT_TRUE(
+      has(materialsError(
+              "regions:\n  - material: glass\n    min: [0, 0, 0]\n    max: [1, 1, 1]\n    reflect_probability: 1.5\n"),
+          {"entry 1", "'reflect_probability' = 1.5 is out of range [0, 1]"}));
+  EXPECT_TRUE(
+      has(materialsError("regions:\n  - min: [0, 0, 0]\n    max: [1, 1, 1]\n"), {"entry 1", "'material' is missing"}));
   EXPECT_TRUE(has(materialsError("surfaces: []\n"), {"room.materials.yaml", "no 'regions' list"}));
   EXPECT_TRUE(has(materialsError("regions: [unclosed\n"), {"room.materials.yaml", "not valid YAML"}));
   try {

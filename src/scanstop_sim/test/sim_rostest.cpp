@@ -45,7 +45,8 @@ TEST(SimNode, ScanRotateForwardScanAndCollide) {
   tf2_ros::Buffer buffer;
   tf2_ros::TransformListener listener(buffer);
   ros::NodeHandle nh;
-  while (nh.resolveName("tf").empty() || ros::topic::waitForMessage<nav_msgs::Odometry>("ground_truth", ros::Duration(1.0)) == nullptr)
+  while (nh.resolveName("tf").empty() ||
+         ros::topic::waitForMessage<nav_msgs::Odometry>("ground_truth", ros::Duration(1.0)) == nullptr)
     ros::WallDuration(0.1).sleep();
   ros::WallDuration(1.0).sleep();  // let the tf subscription connect before the first step
   scanstop_msgs::TakeScan scan;
@@ -204,15 +205,15 @@ TEST(SimNode, BadRequestsAreRefusedAndChangeNothing) {
     scan.request.planes = static_cast<uint16_t>(planes);
     scan = call("scanner/take_scan", scan);
     EXPECT_FALSE(scan.response.success);
-    EXPECT_NE(scan.response.message.find("planes = " + std::to_string(planes)), std::string::npos) << scan.response.message;
+    EXPECT_NE(scan.response.message.find("planes = " + std::to_string(planes)), std::string::npos)
+        << scan.response.message;
     EXPECT_EQ(scan.response.cloud.data.size(), 0u);
   }
   scanstop_msgs::ResetSim reset;
-  const std::vector<std::pair<std::array<double, 3>, std::string>> poses{
-      {{std::nan(""), 5.0, 0.0}, "not finite"},
-      {{1000.0, 5.0, 0.0}, "outside the world"},
-      {{2.0, 5.0, 50.0}, "theta = 50"},
-      {{0.05, 5.0, 0.0}, "puts the robot"}};
+  const std::vector<std::pair<std::array<double, 3>, std::string>> poses{{{std::nan(""), 5.0, 0.0}, "not finite"},
+                                                                         {{1000.0, 5.0, 0.0}, "outside the world"},
+                                                                         {{2.0, 5.0, 50.0}, "theta = 50"},
+                                                                         {{0.05, 5.0, 0.0}, "puts the robot"}};
   for (const auto& p : poses) {
     reset.request.pose.x = p.first[0];
     reset.request.pose.y = p.first[1];
@@ -259,13 +260,15 @@ TEST(SimNode, ScanIsRefusedWhileTheBaseMoves) {
   rotate.request.angle_rad = 1.0;
   rotate = call("base/rotate", rotate);
   EXPECT_FALSE(rotate.response.success);
-  EXPECT_NE(rotate.response.message.find("another rotate/forward motion"), std::string::npos) << rotate.response.message;
+  EXPECT_NE(rotate.response.message.find("another rotate/forward motion"), std::string::npos)
+      << rotate.response.message;
   reset.request.pose.theta = 0.0;
   EXPECT_FALSE(call("sim/reset", reset).response.success);
   const scanstop_msgs::Forward done = motion.get();
   EXPECT_TRUE(done.response.success) << done.response.message;
   EXPECT_NEAR(done.response.achieved_distance_m, 1.5, 1e-9);
-  EXPECT_NEAR(scanstop::ros_conv::fromPoseMsg(done.response.odom_pose.pose).x, 1.5, 1e-9);  // odometry restarted at the reset
+  EXPECT_NEAR(scanstop::ros_conv::fromPoseMsg(done.response.odom_pose.pose).x, 1.5,
+              1e-9);  // odometry restarted at the reset
   // Standing again: odom at rest, the scan works.
   const auto rest = ros::topic::waitForMessage<nav_msgs::Odometry>("odom", ros::Duration(5.0));
   ASSERT_TRUE(rest != nullptr);

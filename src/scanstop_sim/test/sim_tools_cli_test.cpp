@@ -52,8 +52,9 @@ TEST(ScanWorldCli, BadArgumentsAreNamedAndNothingIsWritten) {
   EXPECT_FALSE(exists(tmp.path + "/scan.pcd"));
   r = run(kScanWorld + " " + kWorld + " " + tmp.path + "/no_dir/scan.pcd --pose 1,1,0 --planes 50");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.out.find(tmp.path + "/no_dir/scan.pcd: cannot write: the directory " + tmp.path + "/no_dir does not exist"),
-            std::string::npos)
+  EXPECT_NE(
+      r.out.find(tmp.path + "/no_dir/scan.pcd: cannot write: the directory " + tmp.path + "/no_dir does not exist"),
+      std::string::npos)
       << r.out;
 }
 
@@ -61,7 +62,8 @@ TEST(MakeWorldsCli, BadSeedsAndMissingDirectoriesAreNamed) {
   TempDir tmp("sim_tools_cli_test");
   CliRun r = run(kMakeWorlds + " " + tmp.path + " --furnished 1x");
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.out.find("make_worlds: --furnished seed 1x: not an integer in [0, 999999999]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("make_worlds: --furnished seed 1x: not an integer in [0, 999999999]"), std::string::npos)
+      << r.out;
   r = run(kMakeWorlds + " " + tmp.path + " --bogus");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.out.find("make_worlds: unknown option --bogus"), std::string::npos) << r.out;
@@ -70,7 +72,8 @@ TEST(MakeWorldsCli, BadSeedsAndMissingDirectoriesAreNamed) {
   EXPECT_EQ(r.out.rfind("usage: make_worlds", 0), 0u) << r.out;
   r = run(kMakeWorlds + " " + tmp.path + "/no_dir --furnished 1");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.out.find(tmp.path + "/no_dir/furnished_1.stl: cannot write: the directory " + tmp.path + "/no_dir does not exist"),
+  EXPECT_NE(r.out.find(tmp.path + "/no_dir/furnished_1.stl: cannot write: the directory " + tmp.path +
+                       "/no_dir does not exist"),
             std::string::npos)
       << r.out;
   r = run(kMakeWorlds + " " + tmp.path + " --furnished 1");

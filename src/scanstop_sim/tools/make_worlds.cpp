@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   std::vector<unsigned> seeds;
   try {
-    if (!seed_texts.empty() && !furnished) throw scanstop::ConfigError("unexpected argument " + seed_texts.front() + " (seeds follow --furnished)");
+    if (!seed_texts.empty() && !furnished)
+      throw scanstop::ConfigError("unexpected argument " + seed_texts.front() + " (seeds follow --furnished)");
     for (const std::string& a : seed_texts)
       seeds.push_back(static_cast<unsigned>(scanstop::parseIntegerArg("--furnished seed", a, 0, 999999999)));
     if (furnished && seeds.empty()) throw scanstop::ConfigError("--furnished needs at least one seed");
@@ -47,7 +48,8 @@ int main(int argc, char** argv) {
     for (const auto& w : worlds) {
       const std::string path = out_dir + "/" + w.name + ".stl";
       scanstop::writeStlBinary(path, w.mesh);
-      if (!w.materials_yaml.empty()) scanstop::writeFileAtomic(out_dir + "/" + w.name + ".materials.yaml", w.materials_yaml);
+      if (!w.materials_yaml.empty())
+        scanstop::writeFileAtomic(out_dir + "/" + w.name + ".materials.yaml", w.materials_yaml);
       std::printf("%-12s %5.1f x %4.1f m  %6zu triangles  start (%.2f, %.2f, %.2f rad)  %s\n", w.name.c_str(),
                   w.size_m.x(), w.size_m.y(), w.mesh.faces.size(), w.start.x, w.start.y, w.start.yaw, path.c_str());
     }

@@ -16,7 +16,8 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: scan_world WORLD.stl OUT.pcd --pose x,y,yaw [--planes 50|100|200|400] [--profile perfect|thesis] [--seed S]\n"
+    "usage: scan_world WORLD.stl OUT.pcd --pose x,y,yaw [--planes 50|100|200|400] [--profile perfect|thesis] [--seed "
+    "S]\n"
     "  --pose  robot pose in the world [m, m, rad], |x|, |y| <= 10000 (required)\n"
     "  --seed  0-9223372036854775807 (default 1)\n"
     "exit status: 0 written, 2 bad arguments, 1 unreadable world or unwritable output\n";

@@ -56,11 +56,16 @@ int main(int argc, char** argv) {
       if (a == "--init") {
         if (std::sscanf(v.c_str(), "%lf,%lf,%lf,%lf", &init[0], &init[1], &init[2], &init[3]) != 4)
           throw ConfigError("--init must be x,y,z,yaw_deg (four comma-separated numbers), not '" + v + "'");
-      } else if (a == "--c-max") c_max = std::stod(v);
-      else if (a == "--max-iterations") max_iterations = std::stoi(v);
-      else if (a == "--t-c") t_c = std::stod(v);
-      else if (a == "--r-c-deg") r_c_deg = std::stod(v);
-      else throw ConfigError("unknown option " + a);
+      } else if (a == "--c-max")
+        c_max = std::stod(v);
+      else if (a == "--max-iterations")
+        max_iterations = std::stoi(v);
+      else if (a == "--t-c")
+        t_c = std::stod(v);
+      else if (a == "--r-c-deg")
+        r_c_deg = std::stod(v);
+      else
+        throw ConfigError("unknown option " + a);
     }
     if (!(c_max > 0.0) || max_iterations < 1 || !(t_c > 0.0) || !(r_c_deg > 0.0))
       throw ConfigError("--c-max, --t-c, --r-c-deg must be > 0 and --max-iterations >= 1");

@@ -35,10 +35,10 @@
 #include <string>
 #include <vector>
 
-#include "scanstop_eval/truth_file.h"  // eval/: ground truth, not SLAM
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_check.h"
 #include "scanstop_common/options.h"
+#include "scanstop_eval/truth_file.h"  // eval/: ground truth, not SLAM
 #include "scanstop_slam/icp_slam.h"
 
 using namespace scanstop;
@@ -133,10 +133,11 @@ void printEdgeErrors(const std::vector<slam::PoseGraphEdge>& edges, const std::v
         w.push_back(r.m.whitened);
         sum2 += r.m.position_m * r.m.position_m;
       }
-    std::printf("  edges at the true poses, %-5s %4zu: position RMS %5.2f cm p95 %5.2f max %6.2f cm; yaw p95 %5.3f deg;"
-                " whitened median %6.1f p95 %7.1f\n",
-                robust ? "loop" : "chain", t.size(), t.empty() ? 0.0 : 100 * std::sqrt(sum2 / t.size()), pct(t, 0.95),
-                pct(t, 1.0), pct(y, 0.95), pct(w, 0.5), pct(w, 0.95));
+    std::printf(
+        "  edges at the true poses, %-5s %4zu: position RMS %5.2f cm p95 %5.2f max %6.2f cm; yaw p95 %5.3f deg;"
+        " whitened median %6.1f p95 %7.1f\n",
+        robust ? "loop" : "chain", t.size(), t.empty() ? 0.0 : 100 * std::sqrt(sum2 / t.size()), pct(t, 0.95),
+        pct(t, 1.0), pct(y, 0.95), pct(w, 0.5), pct(w, 0.95));
   }
   std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.m.position_m > b.m.position_m; });
   for (size_t k = 0; k < std::min<size_t>(5, rows.size()); ++k)
@@ -177,8 +178,8 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
   try {
-    const MapDirectory in =
-        openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "relax_bench: warning: " << w << "\n"; });
+    const MapDirectory in = openMapForTool(
+        map_dir, skip_bad, [](const std::string& w) { std::cerr << "relax_bench: warning: " << w << "\n"; });
     const std::vector<std::optional<Pose2D>> truth_by_index = eval::readTruth(truth_path);
     const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
     if (n < 2) throw IoError(map_dir, "holds " + std::to_string(n) + " scan(s): a graph needs two");
@@ -250,9 +251,9 @@ int main(int argc, char** argv) {
       corr_total = 0;
       for (const auto& e : edges) {
         // Round 0: the edge's pairwise result aligns the two; later rounds: LUM's current poses.
-        const Eigen::Affine3f T = round == 0
-                                      ? Eigen::Affine3f(e.T_from_to.toIsometry3f().matrix())
-                                      : Eigen::Affine3f(lum.getTransformation(e.from).inverse() * lum.getTransformation(e.to));
+        const Eigen::Affine3f T =
+            round == 0 ? Eigen::Affine3f(e.T_from_to.toIsometry3f().matrix())
+                       : Eigen::Affine3f(lum.getTransformation(e.from).inverse() * lum.getTransformation(e.to));
         pcl::CorrespondencesPtr c = correspondences(*clouds[e.to], trees[e.from], T, lum_corr);
         corr_total += c->size();
         if (c->size() >= 3) lum.setCorrespondences(e.to, e.from, c);

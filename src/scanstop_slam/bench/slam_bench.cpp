@@ -55,10 +55,11 @@ std::vector<Entry> readList(const std::string& path) {
 int main(int argc, char** argv) {
   slam::SlamConfig config;
   std::string list_path, mode = "3dof", remap = config.icp.degeneracy_remap ? "1" : "0";
-  Options opts("slam_bench",
-               "usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M]\n"
-               "                  [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--degeneracy-remap 0|1]\n"
-               "  LIST: lines 'FILE x y yaw' (scan in base_link, true pose in the world [m, rad])\n");
+  Options opts(
+      "slam_bench",
+      "usage: slam_bench LIST [--mode 3dof|6dof] [--c-max M] [--coarse-c-max M] [--refine-t-c M]\n"
+      "                  [--method point_to_point|point_to_plane] [--degeneracy-ratio R] [--degeneracy-remap 0|1]\n"
+      "  LIST: lines 'FILE x y yaw' (scan in base_link, true pose in the world [m, rad])\n");
   opts.positional("LIST", list_path)
       .choice("--mode", mode, {"3dof", "6dof"})
       .real("--c-max", config.icp.c_max_m, 0.001, 5.0)
@@ -102,12 +103,14 @@ int main(int argc, char** argv) {
       if (i > 0) sum_time += t;
       last_time = t;
       std::printf("%5zu %9.3f %8d %5s %10zu %10.2f %12.3f %12.2f %8.3g%s\n", i, t, r.iterations,
-                  r.converged ? "yes" : "NO", map_before, std::hypot(r.map_pose.x - truth.x, r.map_pose.y - truth.y) * 100,
+                  r.converged ? "yes" : "NO", map_before,
+                  std::hypot(r.map_pose.x - truth.x, r.map_pose.y - truth.y) * 100,
                   std::abs(normalizeAngle(r.map_pose.yaw - truth.yaw)) * 180 / M_PI,
                   std::hypot(odom.x - truth.x, odom.y - truth.y) * 100, r.condition, r.degenerate ? "*" : "");
     }
-    std::printf("registration (scans 1..%zu): mean %.3f s; the last scan against the map of the %zu before it: %.3f s\n",
-                scans.size() - 1, sum_time / (scans.size() - 1), scans.size() - 1, last_time);
+    std::printf(
+        "registration (scans 1..%zu): mean %.3f s; the last scan against the map of the %zu before it: %.3f s\n",
+        scans.size() - 1, sum_time / (scans.size() - 1), scans.size() - 1, last_time);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "slam_bench: " << e.what() << "\n";

@@ -30,7 +30,8 @@ namespace {
 /// 4 floats as one value: GCC/Clang vector extension, one SSE2 register (x86-64 baseline; 8-wide
 /// values without AVX make GCC lower the lane-wise minimum to scalar code).
 typedef float Quad __attribute__((vector_size(sizeof(float) * 4)));
-#define SCANSTOP_SPLAT4(v) Quad{v, v, v, v}
+#define SCANSTOP_SPLAT4(v) \
+  Quad { v, v, v, v }
 typedef int32_t QuadMask __attribute__((vector_size(sizeof(int32_t) * 4)));  ///< lane-wise comparison
 
 inline uint64_t mixKey(uint64_t k) {
@@ -118,7 +119,8 @@ void VoxelMap::Cell::push(const Eigen::Vector3f& p, const Eigen::Vector3f& view)
   b[0] = p.x();
   b[kLanes] = p.y();
   b[2 * kLanes] = p.z();
-  for (int a = 0; a < 3; ++a) views.push_back(static_cast<int8_t>(std::lround(std::clamp(view[a], -1.0f, 1.0f) * 127.0f)));
+  for (int a = 0; a < 3; ++a)
+    views.push_back(static_cast<int8_t>(std::lround(std::clamp(view[a], -1.0f, 1.0f) * 127.0f)));
   ++count;
 }
 
@@ -210,8 +212,8 @@ void VoxelMap::add(const std::vector<Eigen::Vector3f>& points, const Eigen::Vect
   }
 }
 
-bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2,
-                       bool* horizontal, Surface* surface) const {
+bool VoxelMap::nearest(const Eigen::Vector3f& q, double radius_m, Eigen::Vector3f& out, float& dist2, bool* horizontal,
+                       Surface* surface) const {
   const float inv = static_cast<float>(1.0 / voxel_);
   const float vs = static_cast<float>(voxel_);
   const int x = static_cast<int>(std::floor(q.x() * inv));
@@ -496,7 +498,8 @@ class Correspondences {
       float d2;
       bool horiz = false;
       Surface s;
-      has[i] = pair(i, Tf * source_[i], origin, d2, horiz, normals_ ? &s : nullptr) && !(skip_horizontal && horiz) ? 1 : 0;
+      has[i] =
+          pair(i, Tf * source_[i], origin, d2, horiz, normals_ ? &s : nullptr) && !(skip_horizontal && horiz) ? 1 : 0;
       horizontal[i] = horiz ? 1 : 0;
       if (normals_) normal[i] = has[i] && s.planar ? s.normal : Eigen::Vector3f::Zero();
       if (unique) dist2_[i] = d2;
@@ -630,12 +633,12 @@ class Correspondences {
   std::vector<Eigen::Vector3f> normal;   ///< its map point's plane normal (zero: not planar)
 
  private:
-  std::vector<float> dist2_;         // of each pair (unique_matches)
-  std::vector<uint32_t> order_;      // pairs sorted by map point
-  std::vector<uint8_t> hit_;         // last search: a map point within c_max (matched[i])
-  std::vector<uint8_t> bounded_;     // last search: a miss with a lower bound
+  std::vector<float> dist2_;      // of each pair (unique_matches)
+  std::vector<uint32_t> order_;   // pairs sorted by map point
+  std::vector<uint8_t> hit_;      // last search: a map point within c_max (matched[i])
+  std::vector<uint8_t> bounded_;  // last search: a miss with a lower bound
   std::vector<Eigen::Vector3f> anchor_;
-  std::vector<float> lower_;         // nearest map point distance at anchor >= this [m]
+  std::vector<float> lower_;  // nearest map point distance at anchor >= this [m]
 };
 
 /// One step of thesis Algorithm 4 from the `count` pairs at pose T: the update delta, applied as
@@ -961,7 +964,8 @@ void judge(const Eigen::Isometry3d& T_init, const IcpConfig& config, size_t coun
                      " rad) exceeds the bound";
   } else if (result.overlap < config.min_overlap || count < static_cast<size_t>(config.min_correspondences)) {
     result.converged = false;
-    result.failure = "overlap " + std::to_string(result.overlap) + " below min_overlap " + std::to_string(config.min_overlap);
+    result.failure =
+        "overlap " + std::to_string(result.overlap) + " below min_overlap " + std::to_string(config.min_overlap);
   }
   if (!result.converged) result.T_target_source = T_init;
 }
@@ -972,7 +976,8 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
               const IcpConfig& config, const Eigen::Vector3f* source_origin, const Eigen::Isometry3d* prior,
               const Eigen::MatrixXd* prior_information) {
   const long dims = config.six_dof ? 6 : 3;
-  if (prior_information && (prior_information->rows() != dims || prior_information->cols() != dims || !prior_information->allFinite()))
+  if (prior_information &&
+      (prior_information->rows() != dims || prior_information->cols() != dims || !prior_information->allFinite()))
     throw std::invalid_argument("icp: the prior information must be a finite " + std::to_string(dims) + "x" +
                                 std::to_string(dims) + " matrix");
   const Eigen::Isometry3d& keep = prior ? *prior : T_init;
@@ -993,8 +998,8 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
     const size_t used = plane ? eq.count : count;
     if (used < static_cast<size_t>(config.min_correspondences)) {
       result.failure = "too few " + std::string(plane ? "planar " : "") + "correspondences (" + std::to_string(used) +
-                       " < " + std::to_string(config.min_correspondences) + ") within c_max_m = " +
-                       std::to_string(config.c_max_m) + " m";
+                       " < " + std::to_string(config.min_correspondences) +
+                       ") within c_max_m = " + std::to_string(config.c_max_m) + " m";
       result.T_target_source = T_init;
       return result;
     }

@@ -99,7 +99,8 @@ std::string scanProblem(const PointCloud& scan_base, double max_point_distance_m
 }
 
 IcpSlam::IcpSlam(const SlamConfig& config, const std::string& map_dir)
-    : config_(config), map_((config.validate(), config.icp.c_max_m), config.max_points_per_voxel, config.map_spacing_m) {
+    : config_(config),
+      map_((config.validate(), config.icp.c_max_m), config.max_points_per_voxel, config.map_spacing_m) {
   if (map_dir.empty()) return;
   dir_ = std::make_unique<MapDirectory>(map_dir);
   for (const MapProblem& p : dir_->problems()) skipped_.push_back({p.path, p.problem});
@@ -148,9 +149,9 @@ std::vector<ScanPose> IcpSlam::poses() const {
 Eigen::MatrixXd IcpSlam::priorInformation(const Pose2D& odom_leg) const {
   const double d = std::hypot(odom_leg.x, odom_leg.y), turn = std::abs(normalizeAngle(odom_leg.yaw));
   const double s_m = std::hypot(config_.prior_sigma_m, config_.prior_sigma_per_m * d);
-  const double s_rad = std::sqrt(config_.prior_sigma_rad * config_.prior_sigma_rad +
-                                 std::pow(config_.prior_sigma_rad_per_rad * turn, 2) +
-                                 std::pow(config_.prior_sigma_rad_per_m * d, 2));
+  const double s_rad =
+      std::sqrt(config_.prior_sigma_rad * config_.prior_sigma_rad +
+                std::pow(config_.prior_sigma_rad_per_rad * turn, 2) + std::pow(config_.prior_sigma_rad_per_m * d, 2));
   const double i_m = 1.0 / (s_m * s_m), i_rad = 1.0 / (s_rad * s_rad);
   if (!config_.icp.six_dof) return Eigen::Vector3d(i_m, i_m, i_rad).asDiagonal();
   const double i_z = 1.0 / (config_.prior_sigma_m * config_.prior_sigma_m);
@@ -190,13 +191,14 @@ IcpResult IcpSlam::registerStages(const VoxelMap& target, const std::vector<Eige
     refine.t_c_m = config_.refine_t_c_m;
     refine.r_c_rad = config_.refine_r_c_rad;
     refine.max_iterations = config_.refine_max_iterations;
-    IcpResult refined = icp(target, refineSource(source), result.T_target_source, refine, &origin, &start, prior_information);
+    IcpResult refined =
+        icp(target, refineSource(source), result.T_target_source, refine, &origin, &start, prior_information);
     // Not settled within its iterations, or moved farther than a bias can be: the thesis stage's
     // result stands.
     const Eigen::Isometry3d moved = result.T_target_source.inverse() * refined.T_target_source;
     const double moved_m = moved.translation().norm(), moved_rad = Eigen::AngleAxisd(moved.linear()).angle();
-    const bool rejected =
-        refined.converged && (moved_m > config_.refine_max_correction_m || moved_rad > config_.refine_max_correction_rad);
+    const bool rejected = refined.converged &&
+                          (moved_m > config_.refine_max_correction_m || moved_rad > config_.refine_max_correction_rad);
     if (r) {
       r->refine_moved_m = moved_m;
       r->refine_moved_rad = moved_rad;
@@ -295,7 +297,8 @@ void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, 
   r.map_pose = r.converged ? Pose2D::fromIsometry3d(icp_result.T_target_source) : r.guess;
 }
 
-double IcpSlam::guessDistance(const Pose2D& guess, const Pose2D& result, const Eigen::MatrixXd& prior_information) const {
+double IcpSlam::guessDistance(const Pose2D& guess, const Pose2D& result,
+                              const Eigen::MatrixXd& prior_information) const {
   const Pose2D offset = guess.between(result);
   const Eigen::Vector3d d(offset.x, offset.y, offset.yaw);
   // x, y, yaw of the prior's information (6dof: rows and columns 0, 1, 5 of x, y, z, roll, pitch, yaw).
@@ -317,8 +320,8 @@ Registration IcpSlam::registerAgainst(const VoxelMap& target, const PointCloud& 
   return r;
 }
 
-void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>& points,
-                            const Eigen::Vector3f& origin, Registration& r) const {
+void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin,
+                            Registration& r) const {
   const size_t j = graph.size() - 1;  // the new node
   const Pose2D& pj = graph.poses()[j];
   // Candidates: the previous node, the nearest others, the nearest loop candidates.
@@ -337,7 +340,8 @@ void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>
     candidates.push_back(near[k].second);
   // Far-back scans that are among the nearest count as loop candidates too (a robust edge).
   const size_t before_loops = candidates.size();
-  for (size_t k = 0; k < loops.size() && static_cast<int>(candidates.size() - before_loops) < config_.relax_loop_candidates; ++k)
+  for (size_t k = 0;
+       k < loops.size() && static_cast<int>(candidates.size() - before_loops) < config_.relax_loop_candidates; ++k)
     candidates.push_back(loops[k].second);
   bool previous_joined = false;
   for (const size_t i : candidates) {
@@ -391,7 +395,8 @@ void IcpSlam::rebuildMap() {
     if (dir_) {
       // The full scan, as a resume would load it (kept_ holds only the scans that loaded).
       const auto& scans = dir_->scans();
-      const auto it = std::find_if(scans.begin(), scans.end(), [&](const MapScanInfo& s) { return s.index == k.index; });
+      const auto it =
+          std::find_if(scans.begin(), scans.end(), [&](const MapScanInfo& s) { return s.index == k.index; });
       if (it != scans.end()) {
         try {
           for (const auto& p : dir_->loadScan(static_cast<size_t>(it - scans.begin())).points)
@@ -413,9 +418,9 @@ std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
   if (count_ == 0) return "";
   const double jump = std::hypot(odom_pose.x - last_odom_.x, odom_pose.y - last_odom_.y);
   if (jump > config_.max_odom_jump_m)
-    return "the odometry pose " + odom_pose.toString() + " is " + std::to_string(jump) +
-           " m from the last scan's " + last_odom_.toString() + ", beyond max_odom_jump_m " +
-           std::to_string(config_.max_odom_jump_m) + " m (an odometry reset or a corrupt pose)";
+    return "the odometry pose " + odom_pose.toString() + " is " + std::to_string(jump) + " m from the last scan's " +
+           last_odom_.toString() + ", beyond max_odom_jump_m " + std::to_string(config_.max_odom_jump_m) +
+           " m (an odometry reset or a corrupt pose)";
   return "";
 }
 
@@ -449,7 +454,7 @@ std::vector<Eigen::Vector3f> IcpSlam::coarseSource(const std::vector<Eigen::Vect
 
 std::vector<Eigen::Vector3f> IcpSlam::refineSource(const std::vector<Eigen::Vector3f>& source) const {
   return config_.refine_source_voxel_m > config_.source_voxel_m ? sample(source, config_.refine_source_voxel_m)
-                                                                 : source;
+                                                                : source;
 }
 
 Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& odom_pose,
@@ -553,8 +558,10 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
   k.odom = odom_pose;
   k.scale_evidence = r.converged && !r.degenerate;
   kept_.push_back(std::move(k));
-  if (config_.relax) graph_ = std::move(graph);
-  else graph_.addNode(r.map_pose);
+  if (config_.relax)
+    graph_ = std::move(graph);
+  else
+    graph_.addNode(r.map_pose);
   if (!updates.empty()) {
     const auto apply_start = std::chrono::steady_clock::now();
     for (size_t u = 0; u < updates.size(); ++u) kept_[update_nodes[u]].pose = updates[u].second;

@@ -17,9 +17,9 @@
 #include "scanstop_common/config.h"
 #include "scanstop_common/error.h"
 #include "scanstop_common/map_dir.h"
-#include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/launch_control.h"
 #include "scanstop_common/ros/master_watchdog.h"
+#include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
 #include "scanstop_slam/icp_slam.h"
 #include "scanstop_slam/request_check.h"
@@ -33,7 +33,8 @@ class IcpSlamNode {
     SlamConfig config;
     ros_params::ParamReader params(pnh, "icp_slam_node");
     const auto optional = [&](const std::string& name, auto& value) { params.optional(name, value); };
-    double master_timeout_s = 30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
+    double master_timeout_s =
+        30.0;  // main() reads it for the master watchdog; a known name here (and its type checked)
     optional("master_timeout_s", master_timeout_s);
     bool end_launch = false;  // read by main() after a start-up error; a known name here
     optional("end_launch_on_setup_error", end_launch);
@@ -146,7 +147,8 @@ class IcpSlamNode {
     timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { publishTf(false); });
     path_.header.frame_id = map_frame_;
     if (const MapDirectory* dir = slam_->mapDirectory()) {
-      for (const MapScanInfo& s : dir->scans()) path_.poses.push_back(ros_conv::toPoseStamped(s.map_pose, map_frame_, ros::Time(s.stamp_s)));
+      for (const MapScanInfo& s : dir->scans())
+        path_.poses.push_back(ros_conv::toPoseStamped(s.map_pose, map_frame_, ros::Time(s.stamp_s)));
       publishMap(ros::Time::now());
     }
     publishTf(true);
@@ -198,8 +200,8 @@ class IcpSlamNode {
     req.odom_pose.header = (*best)->header;
     req.odom_pose.pose = (*best)->pose.pose;
     onRegister(req, res);
-    if (!res.success) ROS_WARN("icp_slam_node: scan from %s not registered: %s", scan_sub_.getTopic().c_str(),
-                               res.message.c_str());
+    if (!res.success)
+      ROS_WARN("icp_slam_node: scan from %s not registered: %s", scan_sub_.getTopic().c_str(), res.message.c_str());
   }
 
   /// Everything about a request that can be checked before it touches the map; "" when it is fine.
@@ -252,42 +254,50 @@ class IcpSlamNode {
     res.overlap = r.overlap;
     res.scan_index = r.index;
     if (r.converged)
-      ROS_INFO("icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s, "
-               "condition %.3g%s%s, odometry scale %.4f, prior %.1f sigma, weak directions %.1f cm %.2f deg from the remap", r.index, r.map_pose.toString().c_str(),
-               r.iterations, r.correspondences, r.rms_m * 1000, r.time_s, r.condition, r.degenerate ? " (degenerate" : "",
-               r.degenerate ? (r.remapped ? (slam_->config().odometry_prior ? ", held by the odometry prior)"
-                                                                            : ", guess kept along the weak direction)")
-                                          : ")")
-                            : "",
-               r.odom_scale, r.prior_distance, r.weak_gain_m * 100, r.weak_gain_rad * 180 / M_PI);
+      ROS_INFO(
+          "icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s, "
+          "condition %.3g%s%s, odometry scale %.4f, prior %.1f sigma, weak directions %.1f cm %.2f deg from the remap",
+          r.index, r.map_pose.toString().c_str(), r.iterations, r.correspondences, r.rms_m * 1000, r.time_s,
+          r.condition, r.degenerate ? " (degenerate" : "",
+          r.degenerate ? (r.remapped ? (slam_->config().odometry_prior ? ", held by the odometry prior)"
+                                                                       : ", guess kept along the weak direction)")
+                                     : ")")
+                       : "",
+          r.odom_scale, r.prior_distance, r.weak_gain_m * 100, r.weak_gain_rad * 180 / M_PI);
     else
       ROS_WARN("icp_slam_node: scan %u: %s", r.index, res.message.c_str());
     if (r.prior_rejected)
-      ROS_WARN("icp_slam_node: scan %u: weighed against the odometry prior the registration ended %.1f sigma from "
-               "it (beyond prior_gate %.1f): registered again keeping the guess along weak directions",
-               r.index, r.prior_distance, slam_->config().prior_gate);
+      ROS_WARN(
+          "icp_slam_node: scan %u: weighed against the odometry prior the registration ended %.1f sigma from "
+          "it (beyond prior_gate %.1f): registered again keeping the guess along weak directions",
+          r.index, r.prior_distance, slam_->config().prior_gate);
     if (r.gate_retried)
-      ROS_WARN("icp_slam_node: scan %u: the registration ended %.1f sigma from the odometry guess (beyond "
-               "odometry_gate %.1f): registered again without the coarse stage; %s",
-               r.index, r.guess_distance, slam_->config().odometry_gate,
-               r.gate_replaced ? "that result stands" : "it did not land within the gate as well: the first stands");
+      ROS_WARN(
+          "icp_slam_node: scan %u: the registration ended %.1f sigma from the odometry guess (beyond "
+          "odometry_gate %.1f): registered again without the coarse stage; %s",
+          r.index, r.guess_distance, slam_->config().odometry_gate,
+          r.gate_replaced ? "that result stands" : "it did not land within the gate as well: the first stands");
     if (r.failure_retried)
-      ROS_WARN("icp_slam_node: scan %u: the registration failed (%s): registered again with degeneracy_ratio %.3f "
-               "(failure_retry_degeneracy_ratio); %s",
-               r.index, r.first_failure.c_str(), slam_->config().failure_retry_degeneracy_ratio,
-               r.failure_replaced ? "it converged: that result stands" : "it did not converge within the gate either: the odometry pose is kept");
+      ROS_WARN(
+          "icp_slam_node: scan %u: the registration failed (%s): registered again with degeneracy_ratio %.3f "
+          "(failure_retry_degeneracy_ratio); %s",
+          r.index, r.first_failure.c_str(), slam_->config().failure_retry_degeneracy_ratio,
+          r.failure_replaced ? "it converged: that result stands"
+                             : "it did not converge within the gate either: the odometry pose is kept");
     if (r.refine_rejected)
-      ROS_WARN("icp_slam_node: scan %u: the refinement stage moved the pose %.1f cm, %.2f deg (beyond "
-               "refine_max_correction %.1f cm, %.2f deg): kept the thesis stage's result",
-               r.index, r.refine_moved_m * 100, r.refine_moved_rad * 180 / M_PI, slam_->config().refine_max_correction_m * 100,
-               slam_->config().refine_max_correction_rad * 180 / M_PI);
+      ROS_WARN(
+          "icp_slam_node: scan %u: the refinement stage moved the pose %.1f cm, %.2f deg (beyond "
+          "refine_max_correction %.1f cm, %.2f deg): kept the thesis stage's result",
+          r.index, r.refine_moved_m * 100, r.refine_moved_rad * 180 / M_PI,
+          slam_->config().refine_max_correction_m * 100, slam_->config().refine_max_correction_rad * 180 / M_PI);
 
     if (slam_->config().relax) {
       if (r.relaxed)
-        ROS_INFO("icp_slam_node: scan %u: relaxation (%d of %d pairwise edges) moved %zu earlier poses, at most "
-                 "%.1f cm %.2f deg, in %.2f s",
-                 r.index, r.relax_edges, r.relax_edges_tried, r.relax_moved, r.relax_max_moved_m * 100,
-                 r.relax_max_moved_rad * 180 / M_PI, r.relax_time_s);
+        ROS_INFO(
+            "icp_slam_node: scan %u: relaxation (%d of %d pairwise edges) moved %zu earlier poses, at most "
+            "%.1f cm %.2f deg, in %.2f s",
+            r.index, r.relax_edges, r.relax_edges_tried, r.relax_moved, r.relax_max_moved_m * 100,
+            r.relax_max_moved_rad * 180 / M_PI, r.relax_time_s);
       if (!r.relax_problem.empty()) ROS_WARN("icp_slam_node: scan %u: %s", r.index, r.relax_problem.c_str());
     }
 
@@ -297,8 +307,8 @@ class IcpSlamNode {
       // Earlier poses moved: the whole path anew from the corrected poses.
       path_.poses.clear();
       for (const ScanPose& p : slam_->poses())
-        path_.poses.push_back(p.index == r.index ? res.map_pose
-                                                 : ros_conv::toPoseStamped(p.map_pose, map_frame_, ros::Time(p.stamp_s)));
+        path_.poses.push_back(
+            p.index == r.index ? res.map_pose : ros_conv::toPoseStamped(p.map_pose, map_frame_, ros::Time(p.stamp_s)));
     } else {
       path_.poses.push_back(res.map_pose);
     }

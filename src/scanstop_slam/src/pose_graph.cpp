@@ -126,8 +126,8 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphConfig& config) {
   PoseGraphSummary out;
   if (poses_.size() < 2 || edges_.empty()) {
     out.solved = true;
-    out.message = "nothing to relax (" + std::to_string(poses_.size()) + " nodes, " + std::to_string(edges_.size()) +
-                  " edges)";
+    out.message =
+        "nothing to relax (" + std::to_string(poses_.size()) + " nodes, " + std::to_string(edges_.size()) + " edges)";
     return out;
   }
   // Work on a copy: a failed solve leaves the poses as they were.

@@ -64,8 +64,8 @@ std::string cloudLayoutProblem(const sensor_msgs::PointCloud2& msg, size_t max_p
   }
   const size_t need = static_cast<size_t>(msg.row_step) * msg.height;
   if (msg.data.size() != need) {
-    out << "the cloud's data has " << msg.data.size() << " bytes, its layout (row_step " << msg.row_step
-        << " x height " << msg.height << ") needs " << need;
+    out << "the cloud's data has " << msg.data.size() << " bytes, its layout (row_step " << msg.row_step << " x height "
+        << msg.height << ") needs " << need;
     return out.str();
   }
   return "";

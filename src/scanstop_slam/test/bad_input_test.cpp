@@ -1,8 +1,8 @@
 // Bad input to the SLAM core and to slam/register_scan's message checks: every case is refused with
 // a message saying what was wrong, and a refused scan changes nothing (map, poses, map directory).
 #include <gtest/gtest.h>
-#include <stdlib.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <stdlib.h>
 
 #include <cmath>
 #include <fstream>
@@ -30,11 +30,21 @@ PointCloud roomScan(int n = 20000) {
   for (int i = 0; i < n; ++i) {
     const float a = u(rng), b = u(rng);
     switch (i % 5) {
-      case 0: c.points.emplace_back(-3.0f, 5 * a - 2.5f, 2.5f * b); break;
-      case 1: c.points.emplace_back(6 * a - 3, 2.5f, 2.5f * b); break;
-      case 2: c.points.emplace_back(6 * a - 3, -2.5f, 2.5f * b); break;
-      case 3: c.points.emplace_back(1.0f + 0.5f * a, 0.5f, 0.8f * b); break;
-      default: c.points.emplace_back(1.0f, 0.5f * a, 0.8f * b); break;
+      case 0:
+        c.points.emplace_back(-3.0f, 5 * a - 2.5f, 2.5f * b);
+        break;
+      case 1:
+        c.points.emplace_back(6 * a - 3, 2.5f, 2.5f * b);
+        break;
+      case 2:
+        c.points.emplace_back(6 * a - 3, -2.5f, 2.5f * b);
+        break;
+      case 3:
+        c.points.emplace_back(1.0f + 0.5f * a, 0.5f, 0.8f * b);
+        break;
+      default:
+        c.points.emplace_back(1.0f, 0.5f * a, 0.8f * b);
+        break;
     }
   }
   c.setUnorganized();
@@ -256,9 +266,7 @@ TEST(CloudLayoutProblem, EmptyCloud) {
   EXPECT_TRUE(contains(cloudLayoutProblem(m, 1000), "empty"));
 }
 
-TEST(CloudLayoutProblem, TooManyPoints) {
-  EXPECT_TRUE(contains(cloudLayoutProblem(goodMsg(), 50), "more than 50"));
-}
+TEST(CloudLayoutProblem, TooManyPoints) { EXPECT_TRUE(contains(cloudLayoutProblem(goodMsg(), 50), "more than 50")); }
 
 TEST(CloudLayoutProblem, MissingZField) {
   sensor_msgs::PointCloud2 m = goodMsg();

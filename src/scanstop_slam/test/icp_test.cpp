@@ -30,12 +30,24 @@ std::vector<Eigen::Vector3f> roomPoints(std::mt19937& rng, int n) {
   for (int i = 0; i < n; ++i) {
     const float a = u(rng), b = u(rng);
     switch (i % 6) {
-      case 0: pts.emplace_back(6 * a - 3, 5 * b - 2.5f, 0.0f); break;       // floor
-      case 1: pts.emplace_back(-3.0f, 5 * a - 2.5f, 2.5f * b); break;       // west wall
-      case 2: pts.emplace_back(6 * a - 3, 2.5f, 2.5f * b); break;           // north wall
-      case 3: pts.emplace_back(6 * a - 3, -2.5f, 2.5f * b); break;          // south wall
-      case 4: pts.emplace_back(1.0f + 0.5f * a, 0.5f, 0.8f * b); break;     // a box face
-      default: pts.emplace_back(1.0f, 0.5f * a, 0.8f * b); break;           // another box face
+      case 0:
+        pts.emplace_back(6 * a - 3, 5 * b - 2.5f, 0.0f);
+        break;  // floor
+      case 1:
+        pts.emplace_back(-3.0f, 5 * a - 2.5f, 2.5f * b);
+        break;  // west wall
+      case 2:
+        pts.emplace_back(6 * a - 3, 2.5f, 2.5f * b);
+        break;  // north wall
+      case 3:
+        pts.emplace_back(6 * a - 3, -2.5f, 2.5f * b);
+        break;  // south wall
+      case 4:
+        pts.emplace_back(1.0f + 0.5f * a, 0.5f, 0.8f * b);
+        break;  // a box face
+      default:
+        pts.emplace_back(1.0f, 0.5f * a, 0.8f * b);
+        break;  // another box face
     }
   }
   return pts;
@@ -78,7 +90,8 @@ TEST(Icp, RecoversAKnownPlanarTransformExactly) {
   VoxelMap map(0.3, 100000);
   map.add(transformed(src, T));
   const IcpResult r = icp(map, src, Eigen::Isometry3d::Identity(), exactConfig(false));
-  ASSERT_TRUE(r.converged) << r.failure << " err " << (r.T_target_source.translation() - T.translation()).norm() << " rms " << r.rms_m;
+  ASSERT_TRUE(r.converged) << r.failure << " err " << (r.T_target_source.translation() - T.translation()).norm()
+                           << " rms " << r.rms_m;
   EXPECT_LT((r.T_target_source.translation() - T.translation()).norm(), 1e-6);
   EXPECT_LT(rotationError(r.T_target_source, T), 1e-6);
   EXPECT_LT(r.rms_m, 1e-6);
@@ -131,11 +144,21 @@ std::vector<Eigen::Vector3f> floorHeavyRoom(std::mt19937& rng, int n) {
   for (int i = 0; i < n; ++i) {
     const float a = u(rng), b = u(rng);
     switch (i % 10) {
-      case 0: pts.emplace_back(-3.0f, 5 * a - 2.5f, 2.5f * b); break;   // west wall
-      case 1: pts.emplace_back(6 * a - 3, 2.5f, 2.5f * b); break;       // north wall
-      case 2: pts.emplace_back(3.0f, 5 * a - 2.5f, 2.5f * b); break;    // east wall
-      case 3: pts.emplace_back(6 * a - 3, 2.5f * b, 0.0f); break;       // floor (north half)
-      default: pts.emplace_back(6 * a - 3, 5 * b - 2.5f, i % 2 ? 0.0f : 2.5f); break;  // floor, ceiling
+      case 0:
+        pts.emplace_back(-3.0f, 5 * a - 2.5f, 2.5f * b);
+        break;  // west wall
+      case 1:
+        pts.emplace_back(6 * a - 3, 2.5f, 2.5f * b);
+        break;  // north wall
+      case 2:
+        pts.emplace_back(3.0f, 5 * a - 2.5f, 2.5f * b);
+        break;  // east wall
+      case 3:
+        pts.emplace_back(6 * a - 3, 2.5f * b, 0.0f);
+        break;  // floor (north half)
+      default:
+        pts.emplace_back(6 * a - 3, 5 * b - 2.5f, i % 2 ? 0.0f : 2.5f);
+        break;  // floor, ceiling
     }
   }
   return pts;
@@ -243,8 +266,8 @@ TEST(VoxelMap, NearestIsExactAcrossBricksOnBothSidesOfZero) {
     map.add(pts);
     int found_count = 0;
     ASSERT_NO_FATAL_FAILURE(expectNearestAsBruteForce(
-        map, pts, {0.07, 0.1, 0.35}, 1500, [&] { return Eigen::Vector3f(offset + Eigen::Vector3f(u(rng), u(rng), u(rng))); },
-        found_count));
+        map, pts, {0.07, 0.1, 0.35}, 1500,
+        [&] { return Eigen::Vector3f(offset + Eigen::Vector3f(u(rng), u(rng), u(rng))); }, found_count));
     EXPECT_GT(found_count, 1000) << offset.transpose();
     EXPECT_LT(found_count, 4400) << offset.transpose();  // and miss
   }
@@ -332,7 +355,9 @@ TEST(Icp, AccelerationAndWallsOnlyReachTheOptimumWhereTheThesisCriterionStopsSho
     const Eigen::Matrix3d R = (truth.inverse() * r.T_target_source).linear();
     return std::abs(std::atan2(R(1, 0), R(0, 0))) * 180.0 / M_PI;
   };
-  const auto posErr = [&](const IcpResult& r) { return (r.T_target_source.translation() - truth.translation()).norm(); };
+  const auto posErr = [&](const IcpResult& r) {
+    return (r.T_target_source.translation() - truth.translation()).norm();
+  };
   std::cout << "thesis criterion: " << plain.iterations << " iterations, " << yawErrDeg(plain) << " deg, "
             << posErr(plain) * 1000 << " mm; accelerated, walls only: " << ours.iterations << " iterations, "
             << yawErrDeg(ours) << " deg, " << posErr(ours) * 1000 << " mm\n";
@@ -374,8 +399,8 @@ TEST(Icp, SearchBoundsGiveTheSameResultAsFullSearches) {
       EXPECT_EQ(a.iterations, b.iterations);
       EXPECT_EQ(a.correspondences, b.correspondences);
       EXPECT_EQ(a.rms_m, b.rms_m);
-      EXPECT_TRUE(a.T_target_source.matrix() == b.T_target_source.matrix())
-          << a.T_target_source.matrix() << "\n" << b.T_target_source.matrix();
+      EXPECT_TRUE(a.T_target_source.matrix() == b.T_target_source.matrix()) << a.T_target_source.matrix() << "\n"
+                                                                            << b.T_target_source.matrix();
     }
   }
 }
@@ -389,9 +414,12 @@ std::vector<Eigen::Vector3f> corridorPoints(std::mt19937& rng, float x0, float x
   std::vector<Eigen::Vector3f> pts;
   for (int i = 0; i < n; ++i) {
     const float a = u(rng), b = u(rng);
-    if (i % pillar_every == 0) pts.emplace_back(3.0f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);       // pillar, west face
-    else if (i % pillar_every == 1) pts.emplace_back(3.3f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);  // east face
-    else pts.emplace_back(x0 + (x1 - x0) * a, (i % 2 ? 2.0f : 0.0f) + noise(rng), 2.5f * b);  // walls
+    if (i % pillar_every == 0)
+      pts.emplace_back(3.0f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);  // pillar, west face
+    else if (i % pillar_every == 1)
+      pts.emplace_back(3.3f + noise(rng), 0.8f + 0.4f * a, 2.5f * b);  // east face
+    else
+      pts.emplace_back(x0 + (x1 - x0) * a, (i % 2 ? 2.0f : 0.0f) + noise(rng), 2.5f * b);  // walls
   }
   return pts;
 }
@@ -414,9 +442,10 @@ TEST(Icp, UniqueMatchesDoNotPullAScanBackOntoTheMapsEdge) {
   c.unique_matches = true;
   const IcpResult unique = icp(map, scan, Eigen::Isometry3d::Identity(), c);
   ASSERT_TRUE(unique.converged) << unique.failure;
-  std::cout << "from the true pose: plain ICP settles at x = " << plain.T_target_source.translation().x()
-            << " m (" << plain.iterations << " iterations), with unique matches at x = "
-            << unique.T_target_source.translation().x() << " m (" << unique.iterations << ")" << std::endl;
+  std::cout << "from the true pose: plain ICP settles at x = " << plain.T_target_source.translation().x() << " m ("
+            << plain.iterations
+            << " iterations), with unique matches at x = " << unique.T_target_source.translation().x() << " m ("
+            << unique.iterations << ")" << std::endl;
   EXPECT_LT(plain.T_target_source.translation().x(), -0.02);  // pulled back towards the map
   EXPECT_LT(unique.T_target_source.translation().norm(), 0.005);
   EXPECT_LT(rotationError(unique.T_target_source, Eigen::Isometry3d::Identity()), 0.002);
@@ -434,12 +463,17 @@ std::vector<Eigen::Vector3f> thinWallPoints(std::mt19937& rng, bool room, bool n
     const float a = u(rng), b = 2.5f * u(rng);
     const int kind = i % 3;
     if (room) {
-      if (kind == 0) pts.emplace_back(6 * a - 3, noise(rng), b);                          // room face of the wall
-      else pts.emplace_back((kind == 1 ? -3.0f : 3.0f) + noise(rng), 2 * a, b);           // end walls
+      if (kind == 0)
+        pts.emplace_back(6 * a - 3, noise(rng), b);  // room face of the wall
+      else
+        pts.emplace_back((kind == 1 ? -3.0f : 3.0f) + noise(rng), 2 * a, b);  // end walls
     } else {
-      if (kind == 0 && near_face && (i / 3) % 2 == 0) pts.emplace_back(6 * a - 3, -0.08f + noise(rng), b);  // corridor face
-      else if (kind == 0) pts.emplace_back(6 * a - 3, -2.2f + noise(rng), b);            // far wall
-      else pts.emplace_back((kind == 1 ? -3.0f : 3.0f) + noise(rng), -0.08f - 2.12f * a, b);  // end walls
+      if (kind == 0 && near_face && (i / 3) % 2 == 0)
+        pts.emplace_back(6 * a - 3, -0.08f + noise(rng), b);  // corridor face
+      else if (kind == 0)
+        pts.emplace_back(6 * a - 3, -2.2f + noise(rng), b);  // far wall
+      else
+        pts.emplace_back((kind == 1 ? -3.0f : 3.0f) + noise(rng), -0.08f - 2.12f * a, b);  // end walls
     }
   }
   return pts;
@@ -457,7 +491,7 @@ TEST(Icp, SameSideKeepsAScanOffTheOtherFaceOfAThinWall) {
   map.add(thinWallPoints(rng, false, false, 60000), &corridor_sensor);
   const std::vector<Eigen::Vector3f> scan = thinWallPoints(rng, false, true, 30000);
   const Eigen::Vector3f origin = corridor_sensor;  // the scan's frame is the map's (true pose = identity)
-  IcpConfig c;  // 3dof, the thesis' c_max 0.1 m; tight tolerances
+  IcpConfig c;                                     // 3dof, the thesis' c_max 0.1 m; tight tolerances
   c.t_c_m = 1e-6;
   c.r_c_rad = 1e-6;
   c.max_iterations = 500;
@@ -514,8 +548,9 @@ TEST(Icp, SameSideKeepsGrazingPointsOffTheOtherFaceOfAThinWall) {
     c.same_side = false;
     const IcpResult across = icp(map, scan, Eigen::Isometry3d::Identity(), c, &door_sensor);
     ASSERT_TRUE(side.converged) << side.failure;
-    std::cout << toString(method) << ": y after ICP from the true pose: same side " << side.T_target_source.translation().y()
-              << " m, across the wall " << across.T_target_source.translation().y() << " m" << std::endl;
+    std::cout << toString(method) << ": y after ICP from the true pose: same side "
+              << side.T_target_source.translation().y() << " m, across the wall "
+              << across.T_target_source.translation().y() << " m" << std::endl;
     EXPECT_LT(side.T_target_source.translation().norm(), 0.003) << toString(method);
     EXPECT_LT(rotationError(side.T_target_source, Eigen::Isometry3d::Identity()), 0.001) << toString(method);
     EXPECT_GT(across.T_target_source.translation().y(), 0.01) << toString(method);  // the trap is real
@@ -784,9 +819,9 @@ TEST(IcpRealData, RoomPairAgreesWithOpen3D) {
   ASSERT_TRUE(r.converged) << r.failure;
   const double dt = (r.T_target_source.translation() - o3d_t).norm();
   const double dr = Eigen::AngleAxisd(o3d_q.toRotationMatrix().transpose() * r.T_target_source.linear()).angle();
-  std::cout << "room pair, 6dof at c_max 0.5 m: " << r.iterations << " iterations, t = "
-            << r.T_target_source.translation().transpose() << ", vs Open3D " << dt * 1000 << " mm, "
-            << dr * 180 / M_PI << " deg\n";
+  std::cout << "room pair, 6dof at c_max 0.5 m: " << r.iterations
+            << " iterations, t = " << r.T_target_source.translation().transpose() << ", vs Open3D " << dt * 1000
+            << " mm, " << dr * 180 / M_PI << " deg\n";
   EXPECT_LT(dt, 0.01);
   EXPECT_LT(dr, 0.1 * M_PI / 180);
   // The result is a real correction of the guess (0.7 m), not the guess itself.
@@ -811,9 +846,14 @@ std::vector<Eigen::Vector3f> straightCorridor(std::mt19937& rng, float x0, float
     const float a = x0 + (x1 - x0) * u(rng), b = u(rng);
     Eigen::Vector3f p;
     switch (i % 3) {
-      case 0: p = Eigen::Vector3f(a, -1.0f, 2.5f * b); break;     // south wall
-      case 1: p = Eigen::Vector3f(a, 1.0f, 2.5f * b); break;      // north wall
-      default: p = Eigen::Vector3f(a, 2.0f * b - 1.0f, 0.0f);     // floor
+      case 0:
+        p = Eigen::Vector3f(a, -1.0f, 2.5f * b);
+        break;  // south wall
+      case 1:
+        p = Eigen::Vector3f(a, 1.0f, 2.5f * b);
+        break;  // north wall
+      default:
+        p = Eigen::Vector3f(a, 2.0f * b - 1.0f, 0.0f);  // floor
     }
     if (sigma > 0.0f) p += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
     pts.push_back(p);
@@ -897,8 +937,7 @@ TEST(IcpDegeneracy, InACorridorTheUpdateAlongTheAxisKeepsThePrior) {
     const CorridorRun free = corridorRun(map, scan, 0.0, corridorConfig(IcpMethod::point_to_point, six_dof, false));
     const CorridorRun p2p = corridorRun(map, scan, 0.0, corridorConfig(IcpMethod::point_to_point, six_dof, true));
     const CorridorRun p2l = corridorRun(map, scan, 0.0, corridorConfig(IcpMethod::point_to_plane, six_dof, true));
-    const CorridorRun p2l_free =
-        corridorRun(map, scan, 0.0, corridorConfig(IcpMethod::point_to_plane, six_dof, false));
+    const CorridorRun p2l_free = corridorRun(map, scan, 0.0, corridorConfig(IcpMethod::point_to_plane, six_dof, false));
     std::cout << "  point_to_plane without remapping: " << (p2l_free.r.converged ? "converged" : p2l_free.r.failure)
               << std::endl;
     expectDegenerateAlongX(free, six_dof);
@@ -946,7 +985,8 @@ TEST(IcpDegeneracy, TheRobotKeepsThePriorsPositionAlongTheAxisWhenItsYawIsCorrec
   VoxelMap map(0.3, 100);
   map.add(straightCorridor(rng, -15.0f, 15.0f, 300000, 0.001f));
   const Eigen::Isometry3d truth = pose(0.0, 1.6, 0, 0, 0, 0);
-  const std::vector<Eigen::Vector3f> scan = transformed(straightCorridor(rng, -4.0f, 4.0f, 40000, 0.001f), truth.inverse());
+  const std::vector<Eigen::Vector3f> scan =
+      transformed(straightCorridor(rng, -4.0f, 4.0f, 40000, 0.001f), truth.inverse());
   const Eigen::Isometry3d guess = truth * pose(0.05, 0.0, 0, 0, 0, 2.0 * M_PI / 180);
   for (const IcpMethod method : {IcpMethod::point_to_point, IcpMethod::point_to_plane})
     for (const bool six_dof : {false, true}) {
@@ -990,8 +1030,7 @@ std::vector<Eigen::Vector3f> jambFace(std::mt19937& rng, float x_face, int n, fl
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   std::normal_distribution<float> noise(0.0f, sigma);
   std::vector<Eigen::Vector3f> pts;
-  for (int i = 0; i < n; ++i)
-    pts.push_back(Eigen::Vector3f(x_face + noise(rng), 0.8f + 0.2f * u(rng), 2.5f * u(rng)));
+  for (int i = 0; i < n; ++i) pts.push_back(Eigen::Vector3f(x_face + noise(rng), 0.8f + 0.2f * u(rng), 2.5f * u(rng)));
   return pts;
 }
 
@@ -1016,8 +1055,8 @@ TEST(IcpDegeneracy, AWeightedOdometryPriorTakesWhatTheFewPairsAlongTheAxisKnow) 
   const Eigen::Isometry3d guess = pose(0.05, 0.02, 0, 0, 0, 0.5 * M_PI / 180);
   const double s_m = std::hypot(0.01, 0.02 * 2.0), s_rad = 1.0 * M_PI / 180;
   for (const bool six_dof : {false, true}) {
-    Eigen::MatrixXd prior_information = six_dof ? Eigen::MatrixXd::Identity(6, 6) / (s_rad * s_rad)
-                                                : Eigen::MatrixXd::Identity(3, 3) / (s_rad * s_rad);
+    Eigen::MatrixXd prior_information =
+        six_dof ? Eigen::MatrixXd::Identity(6, 6) / (s_rad * s_rad) : Eigen::MatrixXd::Identity(3, 3) / (s_rad * s_rad);
     for (int k = 0; k < (six_dof ? 3 : 2); ++k) prior_information(k, k) = 1.0 / (s_m * s_m);
     // Tolerances of 0.01 mm: pairs at the jamb's edges come and go, and each moves x by ~0.02 mm
     // now that the jamb has a say (the remap's steps ignore x, so they settle at any tolerance).
@@ -1038,7 +1077,7 @@ TEST(IcpDegeneracy, AWeightedOdometryPriorTakesWhatTheFewPairsAlongTheAxisKnow) 
     EXPECT_TRUE(weighted.degenerate) << what;
     EXPECT_NEAR(remapped.T_target_source.translation().x(), 0.05, 0.002) << what;
     EXPECT_LT(std::abs(weighted.T_target_source.translation().x()), 0.02) << what;  // 6dof: the floor's pairs count too
-    EXPECT_GT(weighted.weak_gain_m, 0.03) << what;  // what the jamb added
+    EXPECT_GT(weighted.weak_gain_m, 0.03) << what;                                  // what the jamb added
     EXPECT_NEAR(blind.T_target_source.translation().x(), 0.05, 0.001) << what;
     for (const IcpResult* r : {&weighted, &blind}) {
       EXPECT_NEAR(r->T_target_source.translation().y(), 0.0, 0.001) << what;
@@ -1061,8 +1100,9 @@ TEST(IcpDegeneracy, AWeightedOdometryPriorTakesWhatTheFewPairsAlongTheAxisKnow) 
     EXPECT_NEAR(yawOf(everywhere.T_target_source) * 180 / M_PI, 0.0, 0.05) << what;
   }
   const Eigen::MatrixXd wrong = Eigen::MatrixXd::Identity(6, 6);
-  EXPECT_THROW(icp(plain, scan_plain, guess, corridorConfig(IcpMethod::point_to_plane, false, true), nullptr, nullptr, &wrong),
-               std::invalid_argument);
+  EXPECT_THROW(
+      icp(plain, scan_plain, guess, corridorConfig(IcpMethod::point_to_plane, false, true), nullptr, nullptr, &wrong),
+      std::invalid_argument);
 }
 
 TEST(IcpSlam, ARegistrationFarBeyondThePriorsGateIsRegisteredAgainWithoutItsWeight) {
@@ -1211,8 +1251,9 @@ TEST(IcpRealData, RoomPairPointToPlaneIsWithin2cmOfThePublishedAnswer) {
             << r.weak_direction.transpose() << "), " << r.information_pairs << " planar pairs of " << r.correspondences
             << "; point_to_point condition " << p.condition << std::endl;
   std::cout << "room pair times: map with normals " << seconds(t0, t1) << " s (" << map.size()
-            << " points), point_to_plane " << seconds(t2, t3) << " s (" << r.iterations << " iterations), point_to_point "
-            << seconds(t3, t4) << " s (" << p.iterations << " iterations)" << std::endl;
+            << " points), point_to_plane " << seconds(t2, t3) << " s (" << r.iterations
+            << " iterations), point_to_point " << seconds(t3, t4) << " s (" << p.iterations << " iterations)"
+            << std::endl;
   const double dt = (t - Eigen::Vector3d(1.983, 0.059, 0.020)).norm();
   const double dyaw = std::abs(yaw - 0.7142);
   std::cout << "  vs the published point-to-plane answer: " << dt * 1000 << " mm, " << dyaw * 180 / M_PI << " deg"
@@ -1265,14 +1306,14 @@ TEST(IcpSlam, RegistrationReportsTheDegeneracyOfTheFinalStage) {
   EXPECT_NEAR(r.map_pose.x, 1.0, 0.005);
 }
 
-
 // The odometry reads 5 % long on every leg: after two registered legs the guess uses the scale
 // that maps the odometry onto the registrations, so a degenerate registration (which keeps the
 // guess along its weak direction) no longer inherits the odometry's scale error.
 TEST(IcpSlam, EstimatesTheOdometryScaleFromRegisteredLegs) {
   std::mt19937 rng(17);
   const std::vector<Eigen::Vector3f> world = roomPoints(rng, 60000);
-  const std::vector<Pose2D> truth = {{-1.5, 0, 0}, {-0.7, 0.2, 0.1}, {0.1, -0.2, -0.1}, {0.9, 0.3, 0.2}, {1.6, -0.1, 0.0}};
+  const std::vector<Pose2D> truth = {
+      {-1.5, 0, 0}, {-0.7, 0.2, 0.1}, {0.1, -0.2, -0.1}, {0.9, 0.3, 0.2}, {1.6, -0.1, 0.0}};
   for (int estimate = 0; estimate < 2; ++estimate) {
     SlamConfig config;
     config.odom_scale_estimation = estimate == 1;
@@ -1307,8 +1348,8 @@ TEST(IcpSlam, EstimatesTheOdometryScaleFromRegisteredLegs) {
 
 TEST(VoxelCentroids, OnePointPerVoxelAtTheMeanOfItsPoints) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const std::vector<Eigen::Vector3f> pts = {{0.01f, 0.01f, 0.01f}, {0.25f, 0.05f, 0.05f}, {0.03f, 0.05f, 0.07f},
-                                            {nan, 0.0f, 0.0f},     {0.05f, 0.03f, 0.03f}};
+  const std::vector<Eigen::Vector3f> pts = {
+      {0.01f, 0.01f, 0.01f}, {0.25f, 0.05f, 0.05f}, {0.03f, 0.05f, 0.07f}, {nan, 0.0f, 0.0f}, {0.05f, 0.03f, 0.03f}};
   const std::vector<Eigen::Vector3f> c = voxelCentroids(pts, 0.1);
   ASSERT_EQ(c.size(), 2u);  // in the order the voxels were first hit; the NaN point is left out
   EXPECT_NEAR(c[0].x(), 0.03f, 1e-6);
@@ -1322,11 +1363,11 @@ TEST(VoxelCentroids, OnePointPerVoxelAtTheMeanOfItsPoints) {
   EXPECT_EQ(f[0], pts[0]);
 }
 
-
 /// A SLAM of `config` that maps `first` (world points, the first scan at the origin), then registers
 /// `second_world` (world points) seen from `truth` with odometry `odom`: the second registration.
 Registration registerSecondScan(const SlamConfig& config, const std::vector<Eigen::Vector3f>& first,
-                                const std::vector<Eigen::Vector3f>& second_world, const Pose2D& truth, const Pose2D& odom) {
+                                const std::vector<Eigen::Vector3f>& second_world, const Pose2D& truth,
+                                const Pose2D& odom) {
   IcpSlam slam(config);
   PointCloud a, b;
   a.points = first;

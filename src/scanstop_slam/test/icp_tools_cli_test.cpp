@@ -81,7 +81,8 @@ TEST(IcpRegisterCli, NumbersAreStrictAndJsonStaysJson) {
   const std::string base = kRegister + " " + tmp.file("room.pcd") + " " + tmp.file("room.pcd");
   CliRun r = run(base + " --max-iterations 99999999999");
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.out.find("icp_register: --max-iterations 99999999999: not an integer in [1, 10000]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("icp_register: --max-iterations 99999999999: not an integer in [1, 10000]"), std::string::npos)
+      << r.out;
   r = run(base + " --c-max 0.1abc");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.out.find("--c-max 0.1abc: not a number in [0.001, 5]"), std::string::npos) << r.out;
@@ -100,7 +101,8 @@ TEST(IcpRegisterCli, NumbersAreStrictAndJsonStaysJson) {
   r = run(base + " --init 0.05,0,0,1 --json");
   EXPECT_EQ(r.status, 0) << r.out;
   EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
-  for (const char* bare : {": inf", "-inf", "[inf", " inf,", " inf]", " inf}"}) EXPECT_EQ(r.out.find(bare), std::string::npos) << r.out;
+  for (const char* bare : {": inf", "-inf", "[inf", " inf,", " inf]", " inf}"})
+    EXPECT_EQ(r.out.find(bare), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"converged\": true"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"failure\": \"\""), std::string::npos) << r.out;
 }
@@ -146,7 +148,8 @@ TEST(IcpReplayCli, AMissingScanFileIsRefusedByNameUnlessSkipBad) {
   ASSERT_EQ(std::remove((map + "/scans/scan_0001.pcd").c_str()), 0);
   CliRun r = run(kReplay + " " + map + " --quiet");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.out.find("icp_replay: " + map + "/scans/scan_0001.pcd: no such file (1 problem in the map; --skip-bad loads the rest)"),
+  EXPECT_NE(r.out.find("icp_replay: " + map +
+                       "/scans/scan_0001.pcd: no such file (1 problem in the map; --skip-bad loads the rest)"),
             std::string::npos)
       << r.out;
   r = run(kReplay + " " + map + " --quiet --skip-bad");

@@ -154,9 +154,9 @@ TEST(PoseGraph, ARobustLossKeepsAWrongLoopEdgeFromPullingTheGraph) {
   }
   std::cout << "largest pose change by the wrong edge: robust " << robust_max * 1000 << " mm, least squares "
             << plain_max * 1000 << " mm; noisy loop vs truth " << clean_max * 1000 << " mm\n";
-  EXPECT_LT(clean_max, 0.1);      // the noisy loop itself is fine
-  EXPECT_LT(robust_max, 0.005);   // the wrong edge moves no pose by more than 5 mm
-  EXPECT_GT(plain_max, 0.3);      // without the robust loss it drags the loop far
+  EXPECT_LT(clean_max, 0.1);     // the noisy loop itself is fine
+  EXPECT_LT(robust_max, 0.005);  // the wrong edge moves no pose by more than 5 mm
+  EXPECT_GT(plain_max, 0.3);     // without the robust loss it drags the loop far
 }
 
 TEST(PoseGraph, EmptyAndOneNodeGraphsAreNothingToDo) {

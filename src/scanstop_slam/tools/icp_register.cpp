@@ -55,7 +55,9 @@ int main(int argc, char** argv) {
   Options opts("icp_register", kUsage);
   opts.positional("TARGET", target_path)
       .positional("SOURCE", source_path)
-      .custom("--init", [&](const std::string& v) { init = initFrom(parseRealListArg("--init", v, 4, -1e4, 1e4, "x,y,z,yaw_deg")); })
+      .custom(
+          "--init",
+          [&](const std::string& v) { init = initFrom(parseRealListArg("--init", v, 4, -1e4, 1e4, "x,y,z,yaw_deg")); })
       .choice("--mode", mode, {"3dof", "6dof"})
       .real("--c-max", config.c_max_m, 0.001, 5.0)
       .real("--t-c", config.t_c_m, 1e-9, 1.0)
@@ -101,23 +103,26 @@ int main(int argc, char** argv) {
     if (json) {
       const auto n = [](double v, int precision = 12) { return jsonNumber(v, precision); };
       std::ostringstream weak_json;
-      for (Eigen::Index k = 0; k < r.weak_direction.size(); ++k) weak_json << (k ? ", " : "") << n(r.weak_direction(k), 6);
+      for (Eigen::Index k = 0; k < r.weak_direction.size(); ++k)
+        weak_json << (k ? ", " : "") << n(r.weak_direction(k), 6);
       std::printf(
           "{\"translation\": [%s, %s, %s], \"quaternion\": [%s, %s, %s, %s], \"yaw\": %s, "
           "\"iterations\": %d, \"correspondences\": %zu, \"rms\": %s, \"overlap\": %s, \"converged\": %s, "
           "\"failure\": %s, \"time_s\": %s, \"method\": \"%s\", \"condition\": %s, \"weak_direction\": [%s], "
           "\"degenerate\": %s, \"remapped\": %s, \"information_pairs\": %zu}\n",
           n(t.x()).c_str(), n(t.y()).c_str(), n(t.z()).c_str(), n(q.x()).c_str(), n(q.y()).c_str(), n(q.z()).c_str(),
-          n(q.w()).c_str(), n(yaw).c_str(), r.iterations, r.correspondences, n(r.rms_m).c_str(), n(r.overlap, 6).c_str(),
-          r.converged ? "true" : "false", jsonString(r.failure).c_str(), n(time_s, 6).c_str(),
+          n(q.w()).c_str(), n(yaw).c_str(), r.iterations, r.correspondences, n(r.rms_m).c_str(),
+          n(r.overlap, 6).c_str(), r.converged ? "true" : "false", jsonString(r.failure).c_str(), n(time_s, 6).c_str(),
           slam::toString(config.method).c_str(), n(r.condition, 6).c_str(), weak_json.str().c_str(),
           r.degenerate ? "true" : "false", r.remapped ? "true" : "false", r.information_pairs);
     } else {
       std::printf("translation  %.6f %.6f %.6f m\nquaternion   %.6f %.6f %.6f %.6f (x y z w)\nyaw          %.4f deg\n",
                   t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w(), yaw * 180.0 / M_PI);
-      std::printf("iterations   %d\ncorrespondences %zu (overlap %.3f)\nrms          %.6f m\nconverged    %s%s%s\ntime         %.3f s\n",
-                  r.iterations, r.correspondences, r.overlap, r.rms_m, r.converged ? "yes" : "no",
-                  r.converged ? "" : ": ", r.failure.c_str(), time_s);
+      std::printf(
+          "iterations   %d\ncorrespondences %zu (overlap %.3f)\nrms          %.6f m\nconverged    %s%s%s\ntime         "
+          "%.3f s\n",
+          r.iterations, r.correspondences, r.overlap, r.rms_m, r.converged ? "yes" : "no", r.converged ? "" : ": ",
+          r.failure.c_str(), time_s);
       std::printf("method       %s\ncondition    %.4g (%zu planar pairs)%s%s\nweak direction %s (%s)\n",
                   slam::toString(config.method).c_str(), r.condition, r.information_pairs,
                   r.degenerate ? ", degenerate" : "", r.remapped ? ", remapped" : "", weak.c_str(),

@@ -17,8 +17,8 @@
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/map_check.h"
 #include "scanstop_common/options.h"
-#include "scanstop_slam/icp_slam.h"
 #include "scanstop_eval/truth_file.h"  // eval/: ground truth, not SLAM
+#include "scanstop_slam/icp_slam.h"
 
 using namespace scanstop;
 
@@ -29,7 +29,8 @@ constexpr const char* kUsage =
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
     "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--odom-scale-min-travel M]\n"
     "                  [--coarse-point-to-plane] [--isolated odometry|truth [--from N]]\n"
-    "                  [--odometry-prior | --no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] [--prior-sigma-deg D]\n"
+    "                  [--odometry-prior | --no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] "
+    "[--prior-sigma-deg D]\n"
     "                  [--prior-sigma-angle-per-rad F] [--prior-sigma-deg-per-m D] [--information-points N]\n"
     "                  [--information-sigma M] [--prior-gate SIGMAS] [--prior-all-directions]\n"
     "                  [--odometry-gate SIGMAS (default 5, 0 = off)] [--odometry-gate-rms-ratio F]\n"
@@ -38,10 +39,12 @@ constexpr const char* kUsage =
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
     "                  [--refine-max-correction M] [--refine-max-correction-deg D] [--no-same-side]\n"
     "                  [--c-max M] [--t-c M] [--r-c-deg D] [--max-iterations N]\n"
-    "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] [--quiet]\n"
+    "                  [--source-voxel M] [--map-spacing M] [--max-points-per-voxel N] [--scans N] [--no-accelerate] "
+    "[--quiet]\n"
     "                  [--relax] [--relax-neighbours N] [--relax-loop-candidates N] [--relax-loop-min-gap N]\n"
     "                  [--relax-max-distance M] [--relax-voxel M] [--relax-min-overlap F] [--relax-max-rms M]\n"
-    "                  [--relax-update M] [--relax-update-deg D] [--relax-loss cauchy|huber|none] [--relax-loss-scale S]\n"
+    "                  [--relax-update M] [--relax-update-deg D] [--relax-loss cauchy|huber|none] [--relax-loss-scale "
+    "S]\n"
     "  --isolated: (with --truth) register every scan alone against the earlier scans at their true\n"
     "              poses, from the true pose of the scan before composed with the odometry leg\n"
     "              (odometry) or from its own true pose (truth), and print each registration's error:\n"
@@ -65,14 +68,14 @@ std::string weakText(const slam::Registration& r, const Pose2D& truth) {
   const double mx = c * wx - s * wy, my = s * wx + c * wy, norm = std::hypot(mx, my);
   auto along = [&](const Pose2D& p) { return norm > 0 ? ((p.x - truth.x) * mx + (p.y - truth.y) * my) / norm : 0.0; };
   char buf[160];
-  std::snprintf(buf, sizeof buf, " along (%.2f, %.2f, %.2f) in the map; error along it: guess %.1f cm, result %.1f cm", mx,
-                my, r.weak_direction(r.weak_direction.size() - 1), along(r.guess) * 100, along(r.map_pose) * 100);
+  std::snprintf(buf, sizeof buf, " along (%.2f, %.2f, %.2f) in the map; error along it: guess %.1f cm, result %.1f cm",
+                mx, my, r.weak_direction(r.weak_direction.size() - 1), along(r.guess) * 100, along(r.map_pose) * 100);
   return buf;
 }
 
 /// --isolated: every scan registered alone against the earlier scans at their true poses.
-int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2D>>& truth, const slam::SlamConfig& config,
-                   bool from_truth, size_t max_scans, size_t from, bool quiet) {
+int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2D>>& truth,
+                   const slam::SlamConfig& config, bool from_truth, size_t max_scans, size_t from, bool quiet) {
   const slam::IcpSlam slam(config);
   slam::VoxelMap map(config.icp.c_max_m, config.max_points_per_voxel, config.map_spacing_m);
   const size_t n = max_scans > 0 ? std::min(max_scans, in.size()) : in.size();
@@ -92,18 +95,19 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
       total_s += r.time_s;
       const double e = posErr(r.map_pose, *t), y = yawErrDeg(r.map_pose, *t);
       if (!quiet)
-        std::printf("scan %3zu: %s err %5.1f cm (dx %5.1f dy %5.1f) %5.2f deg, guess off %5.1f cm, it %3d, overlap %.2f, "
-                    "condition %.2f, prior %.1f sigma%s%s%s%s%s\n",
-                    i, r.converged ? "ok    " : "FAILED", e * 100, (r.map_pose.x - t->x) * 100, (r.map_pose.y - t->y) * 100, y,
-                    posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.prior_distance,
-                    r.prior_rejected ? " (beyond prior_gate: registered without its weight)" : "", r.degenerate ? " degenerate" : "",
-                    weakText(r, *t).c_str(),
-                    !r.gate_retried ? ""
-                    : r.gate_replaced ? " (beyond odometry_gate: registered again without the coarse stage)"
-                                      : " (beyond odometry_gate; the second registration did not stand)",
-                    !r.failure_retried ? ""
-                    : r.failure_replaced ? " (failed, registered again with failure_retry_degeneracy_ratio)"
-                                         : " (failed, and again with failure_retry_degeneracy_ratio)");
+        std::printf(
+            "scan %3zu: %s err %5.1f cm (dx %5.1f dy %5.1f) %5.2f deg, guess off %5.1f cm, it %3d, overlap %.2f, "
+            "condition %.2f, prior %.1f sigma%s%s%s%s%s\n",
+            i, r.converged ? "ok    " : "FAILED", e * 100, (r.map_pose.x - t->x) * 100, (r.map_pose.y - t->y) * 100, y,
+            posErr(guess, *t) * 100, r.iterations, r.overlap, r.condition, r.prior_distance,
+            r.prior_rejected ? " (beyond prior_gate: registered without its weight)" : "",
+            r.degenerate ? " degenerate" : "", weakText(r, *t).c_str(),
+            !r.gate_retried   ? ""
+            : r.gate_replaced ? " (beyond odometry_gate: registered again without the coarse stage)"
+                              : " (beyond odometry_gate; the second registration did not stand)",
+            !r.failure_retried   ? ""
+            : r.failure_replaced ? " (failed, registered again with failure_retry_degeneracy_ratio)"
+                                 : " (failed, and again with failure_retry_degeneracy_ratio)");
       failed += r.converged ? 0 : 1;
       sum2 += e * e;
       sum2_yaw += y * y;
@@ -125,17 +129,19 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
     std::printf("isolated: no registration (fewer than two scans with a true pose)\n");
     return 0;
   }
-  std::printf("isolated registrations from %s over %zu scans: position RMS %6.2f cm max %6.2f cm (scan %zu); yaw RMS %5.3f deg "
-              "max %5.3f deg; %zu failed; %.2f s per scan\n",
-              from_truth ? "the true pose" : "the odometry leg", m, std::sqrt(sum2 / m) * 100, max * 100, max_at,
-              std::sqrt(sum2_yaw / m), max_yaw, failed, total_s / m);
+  std::printf(
+      "isolated registrations from %s over %zu scans: position RMS %6.2f cm max %6.2f cm (scan %zu); yaw RMS %5.3f deg "
+      "max %5.3f deg; %zu failed; %.2f s per scan\n",
+      from_truth ? "the true pose" : "the odometry leg", m, std::sqrt(sum2 / m) * 100, max * 100, max_at,
+      std::sqrt(sum2_yaw / m), max_yaw, failed, total_s / m);
   return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string map_dir, out_dir, truth_path, isolated, mode = "3dof", method = slam::toString(slam::SlamConfig().icp.method);
+  std::string map_dir, out_dir, truth_path, isolated, mode = "3dof",
+                                                      method = slam::toString(slam::SlamConfig().icp.method);
   bool quiet = false, skip_bad = false;
   size_t max_scans = 0, isolated_from = 0;
   slam::SlamConfig config;
@@ -210,8 +216,8 @@ int main(int argc, char** argv) {
       std::cerr << "icp_replay: " << e.what() << "\n";
       return kExitUsage;
     }
-    const MapDirectory in =
-        openMapForTool(map_dir, skip_bad, [](const std::string& w) { std::cerr << "icp_replay: warning: " << w << "\n"; });
+    const MapDirectory in = openMapForTool(
+        map_dir, skip_bad, [](const std::string& w) { std::cerr << "icp_replay: warning: " << w << "\n"; });
     std::vector<std::optional<Pose2D>> truth;
     if (!truth_path.empty()) truth = eval::readTruth(truth_path);
     if (isolated_from > 0 && isolated.empty()) {
@@ -253,20 +259,22 @@ int main(int argc, char** argv) {
                     r.map_pose.yaw * 180.0 / M_PI, r.converged ? "ok    " : "FAILED", r.iterations, r.rms_m * 1000.0,
                     r.time_s);
         if (truthOf(i))
-          std::printf("  err %5.1f cm %5.2f deg (stored %5.1f cm, odometry %6.1f cm)", posErr(r.map_pose, *truthOf(i)) * 100,
-                      yawErrDeg(r.map_pose, *truthOf(i)), posErr(info.map_pose, *truthOf(i)) * 100,
-                      posErr(info.odom_pose, *truthOf(i)) * 100);
+          std::printf("  err %5.1f cm %5.2f deg (stored %5.1f cm, odometry %6.1f cm)",
+                      posErr(r.map_pose, *truthOf(i)) * 100, yawErrDeg(r.map_pose, *truthOf(i)),
+                      posErr(info.map_pose, *truthOf(i)) * 100, posErr(info.odom_pose, *truthOf(i)) * 100);
         std::printf("\n");
         if (!r.converged) std::printf("          %s\n", r.failure.c_str());
         if (r.failure_retried)
-          std::printf("          failed (%s), registered again with degeneracy_ratio %.3f: %s\n", r.first_failure.c_str(),
-                      config.failure_retry_degeneracy_ratio, r.failure_replaced ? "that result stands" : "failed too");
+          std::printf("          failed (%s), registered again with degeneracy_ratio %.3f: %s\n",
+                      r.first_failure.c_str(), config.failure_retry_degeneracy_ratio,
+                      r.failure_replaced ? "that result stands" : "failed too");
         if (config.relax)
-          std::printf("          relax: %d/%d pairwise edges, %s%s, %zu poses moved, at most %.1f cm %.2f deg, %.2f s%s%s\n",
-                      r.relax_edges, r.relax_edges_tried, r.relax_solved ? "solved" : "NOT solved",
-                      r.relaxed ? ", applied" : "", r.relax_moved, r.relax_max_moved_m * 100,
-                      r.relax_max_moved_rad * 180 / M_PI, r.relax_time_s, r.relax_problem.empty() ? "" : ": ",
-                      r.relax_problem.c_str());
+          std::printf(
+              "          relax: %d/%d pairwise edges, %s%s, %zu poses moved, at most %.1f cm %.2f deg, %.2f s%s%s\n",
+              r.relax_edges, r.relax_edges_tried, r.relax_solved ? "solved" : "NOT solved",
+              r.relaxed ? ", applied" : "", r.relax_moved, r.relax_max_moved_m * 100,
+              r.relax_max_moved_rad * 180 / M_PI, r.relax_time_s, r.relax_problem.empty() ? "" : ": ",
+              r.relax_problem.c_str());
         if (r.refine_rejected)
           std::printf("          refinement moved %.1f cm, %.2f deg: rejected, the thesis stage's result stands\n",
                       r.refine_moved_m * 100, r.refine_moved_rad * 180.0 / M_PI);
@@ -280,14 +288,15 @@ int main(int argc, char** argv) {
     std::printf("%zu scans, %.2f s registration in all (%.2f s per scan)", n, total_s, total_s / n);
     if (err_n > 0) {
       const size_t last = last_truth;
-      std::printf("; mean error %.1f cm; error of scan %zu %.1f cm %.2f deg (odometry alone %.1f cm)", err_sum / err_n * 100,
-                  last, posErr(poses[last], *truthOf(last)) * 100, yawErrDeg(poses[last], *truthOf(last)),
-                  posErr(in.scans()[last].odom_pose, *truthOf(last)) * 100);
+      std::printf("; mean error %.1f cm; error of scan %zu %.1f cm %.2f deg (odometry alone %.1f cm)",
+                  err_sum / err_n * 100, last, posErr(poses[last], *truthOf(last)) * 100,
+                  yawErrDeg(poses[last], *truthOf(last)), posErr(in.scans()[last].odom_pose, *truthOf(last)) * 100);
     }
     std::printf("\n");
     if (config.relax)
-      std::printf("relaxation: %zu of %zu scans applied it, %zu of %zu pairwise edges accepted, %.2f s per scan (max %.2f s)\n",
-                  relaxations, n, relax_edges, relax_tried, relax_s / n, relax_max_s);
+      std::printf(
+          "relaxation: %zu of %zu scans applied it, %zu of %zu pairwise edges accepted, %.2f s per scan (max %.2f s)\n",
+          relaxations, n, relax_edges, relax_tried, relax_s / n, relax_max_s);
     if (err_n > 0) {
       // Errors over all scans with ground truth: the final poses (after the last relaxation) and the
       // poses as each scan was registered.

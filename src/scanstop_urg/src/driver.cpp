@@ -35,7 +35,8 @@ StreamFactory serialStreamFactory() {
   };
 }
 
-UrgDriver::UrgDriver(const DriverConfig& config, StreamFactory factory) : config_(config), factory_(std::move(factory)) {
+UrgDriver::UrgDriver(const DriverConfig& config, StreamFactory factory)
+    : config_(config), factory_(std::move(factory)) {
   config_.validate();
   stats_.state = "not connected yet";
 }

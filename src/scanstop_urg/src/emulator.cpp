@@ -115,18 +115,21 @@ UrgEmulator::Response UrgEmulator::handleLine(const std::string& line) {
   if (body == "SCIP2.0") {
     r.bytes = reply(line, "0E");  // already in SCIP 2.0
   } else if (cmd == "VV" && params.empty()) {
-    r.bytes = reply(line, "00", kv("VEND", "Hokuyo Automatic Co.,Ltd.") + kv("PROD", "SOKUIKI Sensor URG-04LX") +
-                                    kv("FIRM", "3.3.00,07/07/10(scanstop emulator)") + kv("PROT", "SCIP 2.0") +
-                                    kv("SERI", "H0000042"));
+    r.bytes =
+        reply(line, "00",
+              kv("VEND", "Hokuyo Automatic Co.,Ltd.") + kv("PROD", "SOKUIKI Sensor URG-04LX") +
+                  kv("FIRM", "3.3.00,07/07/10(scanstop emulator)") + kv("PROT", "SCIP 2.0") + kv("SERI", "H0000042"));
   } else if (cmd == "PP" && params.empty()) {
-    r.bytes = reply(line, "00", kv("MODL", "URG-04LX(Hokuyo Automatic Co.,Ltd.)") + kv("DMIN", "20") +
-                                    kv("DMAX", "5600") + kv("ARES", "1024") + kv("AMIN", "44") + kv("AMAX", "725") +
-                                    kv("AFRT", "384") + kv("SCAN", "600"));
+    r.bytes =
+        reply(line, "00",
+              kv("MODL", "URG-04LX(Hokuyo Automatic Co.,Ltd.)") + kv("DMIN", "20") + kv("DMAX", "5600") +
+                  kv("ARES", "1024") + kv("AMIN", "44") + kv("AMAX", "725") + kv("AFRT", "384") + kv("SCAN", "600"));
   } else if (cmd == "II" && params.empty()) {
-    r.bytes = reply(line, "00", kv("MODL", "URG-04LX") + kv("LASR", laser_on_ ? "ON" : "OFF") +
-                                    kv("SCSP", "Initial(600)[rpm]") + kv("MESM", "Measuring by SCIP") +
-                                    kv("SBPS", "USB only") + kv("TIME", encodeValue(timestamp(), 4)) +
-                                    kv("STAT", laser_fault_ ? "Laser malfunction" : "Sensor works well."));
+    r.bytes =
+        reply(line, "00",
+              kv("MODL", "URG-04LX") + kv("LASR", laser_on_ ? "ON" : "OFF") + kv("SCSP", "Initial(600)[rpm]") +
+                  kv("MESM", "Measuring by SCIP") + kv("SBPS", "USB only") + kv("TIME", encodeValue(timestamp(), 4)) +
+                  kv("STAT", laser_fault_ ? "Laser malfunction" : "Sensor works well."));
   } else if (cmd == "BM" && params.empty()) {
     if (laser_fault_) {
       r.bytes = reply(line, "01");
@@ -204,7 +207,8 @@ std::string UrgEmulator::scanBody(int first, int last, int cluster, int chars) {
   return withSum(encodeValue(timestamp(), 4)) + "\n" + encodeDataBlock(encoded);
 }
 
-UrgEmulator::Response UrgEmulator::handleScan(const std::string& echo, const std::string& cmd, const std::string& params) {
+UrgEmulator::Response UrgEmulator::handleScan(const std::string& echo, const std::string& cmd,
+                                              const std::string& params) {
   Response r;
   if (params.size() != 10) {
     r.bytes = reply(echo, params.size() < 10 ? "0C" : "0A");

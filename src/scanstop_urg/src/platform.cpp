@@ -9,21 +9,28 @@ namespace stepper {
 
 const char* statusMeaning(int status) {
   switch (status) {
-    case kOk: return "ok";
-    case kNotHomed: return "not homed";
-    case kBadParameter: return "bad parameter";
-    case kStall: return "motor stall or index switch not found";
-    case kEndOfTravel: return "end of travel (half a turn)";
-    case kBadSum: return "the controller received a line with a bad sum";
-    case kUnknownCommand: return "unknown command";
-    case kNotConfigured: return "no step count set";
-    default: return "unknown status";
+    case kOk:
+      return "ok";
+    case kNotHomed:
+      return "not homed";
+    case kBadParameter:
+      return "bad parameter";
+    case kStall:
+      return "motor stall or index switch not found";
+    case kEndOfTravel:
+      return "end of travel (half a turn)";
+    case kBadSum:
+      return "the controller received a line with a bad sum";
+    case kUnknownCommand:
+      return "unknown command";
+    case kNotConfigured:
+      return "no step count set";
+    default:
+      return "unknown status";
   }
 }
 
-std::string formatCommand(const std::string& cmd, const std::string& params) {
-  return withSum(cmd + params) + "\n";
-}
+std::string formatCommand(const std::string& cmd, const std::string& params) { return withSum(cmd + params) + "\n"; }
 
 std::string formatReply(const std::string& cmd, int status, const std::string& values) {
   char st[8];
@@ -110,9 +117,8 @@ stepper::Reply StepperPlatform::transact(const std::string& cmd, const std::stri
 
 void StepperPlatform::prepare(int planes) {
   if (planes < 1 || planes > stepper::kMaxCount)
-    throw PlatformError("platform: " + std::to_string(planes) + " planes is outside 1.." +
-                            std::to_string(stepper::kMaxCount),
-                        false);
+    throw PlatformError(
+        "platform: " + std::to_string(planes) + " planes is outside 1.." + std::to_string(stepper::kMaxCount), false);
   char buf[8];
   std::snprintf(buf, sizeof(buf), "%04d", planes);
   transact("ER", "", config_.reply_timeout_s);  // clear an old latched error
@@ -135,7 +141,8 @@ int StepperPlatform::advance() {
     // The reply was lost: ask where the platform is, and step again only if it did not move.
     const PlatformStatus now = status();
     if (now.position == before.position + 1) return now.position;
-    if (now.position != before.position || !now.homed) throw PlatformError("platform lost its position during a step", false);
+    if (now.position != before.position || !now.homed)
+      throw PlatformError("platform lost its position during a step", false);
     const stepper::Reply r = transact("ST", "", config_.reply_timeout_s);
     return parseDigits(r.values, 0, 4, "position");
   }

@@ -65,7 +65,8 @@ size_t assemblePlane(PointCloud& cloud, const ScanGeometry& geometry, int plane,
   if (static_cast<int>(values.size()) != beams)
     throw std::invalid_argument("plane " + std::to_string(plane) + " has " + std::to_string(values.size()) +
                                 " values, expected " + std::to_string(beams));
-  if (plane < 0 || plane >= planes || static_cast<int>(cloud.height) != planes || static_cast<int>(cloud.width) != beams)
+  if (plane < 0 || plane >= planes || static_cast<int>(cloud.height) != planes ||
+      static_cast<int>(cloud.width) != beams)
     throw std::invalid_argument("plane " + std::to_string(plane) + " does not fit the cloud layout");
   const Eigen::Vector3f o = geometry.origin(plane, planes);
   // The same expressions as direction(), with the plane's trigonometry hoisted out of the loop.
@@ -178,7 +179,8 @@ ScanResult RotatingScanner::takeScan(int planes, const std::function<void(int, i
   } catch (const PlatformError& e) {
     note = std::string("; parking the platform failed: ") + e.what();
   }
-  if (config_.outlier_filter) result.outliers_removed = static_cast<uint32_t>(filterOutliers(result.cloud, config_.filter));
+  if (config_.outlier_filter)
+    result.outliers_removed = static_cast<uint32_t>(filterOutliers(result.cloud, config_.filter));
   result.valid_points = static_cast<uint32_t>(result.cloud.countFinite());
   return finish(true, std::to_string(result.valid_points) + " valid points, " + std::to_string(result.planes_dropped) +
                           " planes dropped, " + std::to_string(result.plane_retries) + " re-reads, " +

@@ -7,12 +7,18 @@ namespace urg {
 
 const char* kindName(ScipError::Kind kind) {
   switch (kind) {
-    case ScipError::Kind::kChecksum: return "checksum error";
-    case ScipError::Kind::kFormat: return "malformed reply";
-    case ScipError::Kind::kStatus: return "error status";
-    case ScipError::Kind::kTimeout: return "timeout";
-    case ScipError::Kind::kScip11: return "device in SCIP 1.1";
-    case ScipError::Kind::kDisconnected: return "disconnected";
+    case ScipError::Kind::kChecksum:
+      return "checksum error";
+    case ScipError::Kind::kFormat:
+      return "malformed reply";
+    case ScipError::Kind::kStatus:
+      return "error status";
+    case ScipError::Kind::kTimeout:
+      return "timeout";
+    case ScipError::Kind::kScip11:
+      return "device in SCIP 1.1";
+    case ScipError::Kind::kDisconnected:
+      return "disconnected";
   }
   return "unknown";
 }
@@ -38,7 +44,8 @@ bool checkSum(std::string_view line, bool tolerant) {
 }
 
 std::string encodeValue(uint32_t value, int chars) {
-  if (chars < 1 || chars > 4) throw std::invalid_argument("SCIP values have 1 to 4 characters, not " + std::to_string(chars));
+  if (chars < 1 || chars > 4)
+    throw std::invalid_argument("SCIP values have 1 to 4 characters, not " + std::to_string(chars));
   if (chars < 4 && value >= (1u << (6 * chars)))
     throw std::invalid_argument("value " + std::to_string(value) + " does not fit in " + std::to_string(chars) +
                                 " SCIP characters");
@@ -132,12 +139,13 @@ bool ReplyReader::feedLine(const std::string& line) {
       }
       if (line.size() != 3) {
         state_ = State::kDone;
-        throw ScipError(ScipError::Kind::kFormat, "reply to '" + echo_ + "': status line '" + line +
-                                                      "' is not 2 characters and a sum");
+        throw ScipError(ScipError::Kind::kFormat,
+                        "reply to '" + echo_ + "': status line '" + line + "' is not 2 characters and a sum");
       }
       if (!checkSum(line)) {
         state_ = State::kDone;
-        throw ScipError(ScipError::Kind::kChecksum, "reply to '" + echo_ + "': status line '" + line + "' has a wrong sum");
+        throw ScipError(ScipError::Kind::kChecksum,
+                        "reply to '" + echo_ + "': status line '" + line + "' has a wrong sum");
       }
       reply_.status_line = line;
       state_ = State::kData;
@@ -179,7 +187,8 @@ bool ReplyReader::feedLine(const std::string& line) {
 }
 
 std::string scanCommand(int first, int last, int cluster, int chars) {
-  if (first < 0 || last > 9999 || last < first) throw std::invalid_argument("scan steps must satisfy 0 <= first <= last <= 9999");
+  if (first < 0 || last > 9999 || last < first)
+    throw std::invalid_argument("scan steps must satisfy 0 <= first <= last <= 9999");
   if (cluster < 0 || cluster > 99) throw std::invalid_argument("cluster must be in 0..99");
   if (chars != 2 && chars != 3) throw std::invalid_argument("scan values have 2 (GS) or 3 (GD) characters");
   char buf[32];
@@ -206,15 +215,16 @@ ScanData decodeScanReply(const Reply& reply, int first, int last, int cluster, i
                                                   " data lines, expected a time line and " + std::to_string(lines));
   ScanData out;
   if (reply.data[0].size() != 4 || !decodeValue(reply.data[0], &out.timestamp_ms))
-    throw ScipError(ScipError::Kind::kFormat, "reply to '" + reply.echo + "': bad time stamp line '" + reply.data[0] + "'");
+    throw ScipError(ScipError::Kind::kFormat,
+                    "reply to '" + reply.echo + "': bad time stamp line '" + reply.data[0] + "'");
   std::string joined;
   joined.reserve(total);
   for (size_t i = 1; i < reply.data.size(); ++i) {
     const std::string& d = reply.data[i];
     const size_t expected = i < lines ? 64 : total - 64 * (lines - 1);
     if (d.size() != expected)
-      throw ScipError(ScipError::Kind::kFormat, "reply to '" + reply.echo + "': data line " + std::to_string(i) + " has " +
-                                                    std::to_string(d.size()) + " characters, expected " +
+      throw ScipError(ScipError::Kind::kFormat, "reply to '" + reply.echo + "': data line " + std::to_string(i) +
+                                                    " has " + std::to_string(d.size()) + " characters, expected " +
                                                     std::to_string(expected));
     joined += d;
   }
@@ -268,16 +278,25 @@ std::string statusMeaning(const std::string& command, const std::string& status)
 
 const char* errorCodeMeaning(uint32_t code) {
   switch (code) {
-    case 0: return "no object in range (probably ~22 m)";
+    case 0:
+      return "no object in range (probably ~22 m)";
     case 1:
-    case 2: return "reflection too weak";
-    case 6: return "others (possibly 5.7 m)";
-    case 7: return "neighbouring steps in error";
-    case 8: return "intensity difference between the two waves";
-    case 9: return "same step failed in the previous two scans";
-    case 18: return "strong reflector";
-    case 19: return "step cannot be measured";
-    default: break;
+    case 2:
+      return "reflection too weak";
+    case 6:
+      return "others (possibly 5.7 m)";
+    case 7:
+      return "neighbouring steps in error";
+    case 8:
+      return "intensity difference between the two waves";
+    case 9:
+      return "same step failed in the previous two scans";
+    case 18:
+      return "strong reflector";
+    case 19:
+      return "step cannot be measured";
+    default:
+      break;
   }
   if (code >= 10 && code <= 17) return "other error";
   if (code < 20) return "unlisted error code";

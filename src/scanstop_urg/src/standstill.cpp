@@ -14,7 +14,8 @@ void StandstillConfig::validate() const {
 }
 
 std::string baseMotionProblem(double v_mps, double w_radps, const StandstillConfig& config) {
-  const bool still = std::abs(v_mps) <= config.max_linear_speed_mps && std::abs(w_radps) <= config.max_angular_speed_radps;
+  const bool still =
+      std::abs(v_mps) <= config.max_linear_speed_mps && std::abs(w_radps) <= config.max_angular_speed_radps;
   if (still) return "";  // (false for NaN: a non-finite twist counts as moving)
   char buf[256];
   std::snprintf(buf, sizeof(buf),

@@ -39,8 +39,8 @@ std::string DeviceInfo::summary() const {
     return it == m.end() ? std::string("?") : it->second;
   };
   s << get(version, "PROD") << " serial " << get(version, "SERI") << ", firmware " << get(version, "FIRM") << ", DMIN "
-    << dmin_mm << " mm, DMAX " << dmax_mm << " mm, steps " << amin << ".." << amax << " of " << ares << ", "
-    << scan_rpm << " rpm, " << get(state, "STAT");
+    << dmin_mm << " mm, DMAX " << dmax_mm << " mm, steps " << amin << ".." << amax << " of " << ares << ", " << scan_rpm
+    << " rpm, " << get(state, "STAT");
   return s.str();
 }
 
@@ -63,9 +63,10 @@ Reply UrgDevice::command(const std::string& command, double timeout_s, bool kv_l
         stats_.skipped_lines += reader.skippedLines();
         const std::string what = reader.echoSeen() ? "a half-read reply" : "no reply";
         channel_.drain(0.05, 0.5);
-        throw ScipError(ScipError::Kind::kTimeout,
-                        what + " to '" + line + "' within " + std::to_string(timeout_s) + " s" +
-                            (reader.skippedLines() ? " (" + std::to_string(reader.skippedLines()) + " unexpected lines)" : ""));
+        throw ScipError(
+            ScipError::Kind::kTimeout,
+            what + " to '" + line + "' within " + std::to_string(timeout_s) + " s" +
+                (reader.skippedLines() ? " (" + std::to_string(reader.skippedLines()) + " unexpected lines)" : ""));
       }
       if (reader.feedLine(received)) break;
     }
@@ -88,8 +89,8 @@ Reply UrgDevice::expectOk(const std::string& cmd, double timeout_s, bool kv_line
   Reply r = command(cmd, timeout_s, kv_lines);
   const std::string st = r.status();
   if (st != "00" && (also_ok.empty() || st != also_ok))
-    throw ScipError(ScipError::Kind::kStatus, "the URG refused " + cmd + ": status " + st + " (" +
-                                                  statusMeaning(cmd.substr(0, 2), st) + ")");
+    throw ScipError(ScipError::Kind::kStatus,
+                    "the URG refused " + cmd + ": status " + st + " (" + statusMeaning(cmd.substr(0, 2), st) + ")");
   return r;
 }
 
@@ -148,11 +149,14 @@ void UrgDevice::initialize() {
   if (!ok) throw ScipError(ScipError::Kind::kTimeout, "the URG does not answer in SCIP 2.0: " + problem);
   expectOk("RS", config_.reply_timeout_s);
   info_.version.clear();
-  for (const auto& kv : parseKeyValues(expectOk("VV", config_.reply_timeout_s, true))) info_.version[kv.first] = kv.second;
+  for (const auto& kv : parseKeyValues(expectOk("VV", config_.reply_timeout_s, true)))
+    info_.version[kv.first] = kv.second;
   info_.parameters.clear();
-  for (const auto& kv : parseKeyValues(expectOk("PP", config_.reply_timeout_s, true))) info_.parameters[kv.first] = kv.second;
+  for (const auto& kv : parseKeyValues(expectOk("PP", config_.reply_timeout_s, true)))
+    info_.parameters[kv.first] = kv.second;
   info_.state.clear();
-  for (const auto& kv : parseKeyValues(expectOk("II", config_.reply_timeout_s, true))) info_.state[kv.first] = kv.second;
+  for (const auto& kv : parseKeyValues(expectOk("II", config_.reply_timeout_s, true)))
+    info_.state[kv.first] = kv.second;
   const auto& pp = info_.parameters;
   info_.dmin_mm = intField(pp, "DMIN", 20);
   info_.dmax_mm = intField(pp, "DMAX", 5600);
@@ -163,8 +167,9 @@ void UrgDevice::initialize() {
   info_.scan_rpm = intField(pp, "SCAN", 600);
   if (config_.first_step < info_.amin || config_.last_step > info_.amax)
     throw ScipError(ScipError::Kind::kStatus, "configured steps " + std::to_string(config_.first_step) + ".." +
-                                                  std::to_string(config_.last_step) + " lie outside the sensor's AMIN..AMAX " +
-                                                  std::to_string(info_.amin) + ".." + std::to_string(info_.amax));
+                                                  std::to_string(config_.last_step) +
+                                                  " lie outside the sensor's AMIN..AMAX " + std::to_string(info_.amin) +
+                                                  ".." + std::to_string(info_.amax));
   expectOk("BM", config_.reply_timeout_s, false, "02");
 }
 

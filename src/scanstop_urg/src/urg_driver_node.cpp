@@ -99,7 +99,8 @@ UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   driver_ = std::make_unique<UrgDriver>(config);
 
   Eigen::Isometry3d T_base_laser = Eigen::Isometry3d::Identity();
-  T_base_laser.translation() = Eigen::Vector3d(config.scanner.geometry.x_offset_m, 0.0, config.scanner.geometry.height_m);
+  T_base_laser.translation() =
+      Eigen::Vector3d(config.scanner.geometry.x_offset_m, 0.0, config.scanner.geometry.height_m);
   static_tf_.sendTransform(ros_conv::toTransformMsg(T_base_laser, base_frame_, laser_frame_, ros::Time::now()));
 
   diagnostics_.setHardwareID("URG-04LX on " + config.urg_port + ", platform on " + config.platform_port);
@@ -109,8 +110,10 @@ UrgDriverNode::UrgDriverNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   progress_pub_ = nh.advertise<scanstop_msgs::Progress>("scanner/progress", 10);
   odom_sub_ = nh.subscribe(node.odom_topic, 20, &UrgDriverNode::onOdom, this);
   take_scan_srv_ = nh.advertiseService("scanner/take_scan", &UrgDriverNode::onTakeScan, this);
-  reconnect_timer_ = nh.createWallTimer(ros::WallDuration(node.reconnect_interval_s), &UrgDriverNode::onReconnectTimer, this);
-  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(node.diagnostic_period_s), &UrgDriverNode::onDiagnosticsTimer, this);
+  reconnect_timer_ =
+      nh.createWallTimer(ros::WallDuration(node.reconnect_interval_s), &UrgDriverNode::onReconnectTimer, this);
+  diagnostics_timer_ =
+      nh.createWallTimer(ros::WallDuration(node.diagnostic_period_s), &UrgDriverNode::onDiagnosticsTimer, this);
   ROS_INFO("rotating_urg_driver: URG on %s, platform on %s; connecting", config.urg_port.c_str(),
            config.platform_port.c_str());
 }

@@ -18,8 +18,8 @@ struct Rig {
   StepperEmulator stepper;
   UrgEmulator urg{[this](int step) { return scene.value(stepper.angle(), step); }};
   FaultInjector faults{11};
-  int silent_replies = 0;   ///< the URG ignores this many commands
-  bool unplugged = false;   ///< both streams fail; new ones cannot be opened
+  int silent_replies = 0;  ///< the URG ignores this many commands
+  bool unplugged = false;  ///< both streams fail; new ones cannot be opened
   int opens = 0;
   std::string noise_before_next_reply;  ///< bytes sent before the next URG reply (stale lines, garbage)
 };

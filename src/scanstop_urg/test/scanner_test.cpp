@@ -84,8 +84,7 @@ TEST(Geometry, RangesFromValues) {
   std::vector<uint32_t> all(682, 2345);
   PointCloud c2 = emptyScan(g, 3);
   assemblePlane(c2, g, 2, 3, all);
-  for (int b = 0; b < 682; ++b)
-    ASSERT_EQ(c2.points[2 * 682 + b], g.origin(2, 3) + 2.345f * g.direction(2, 3, b)) << b;
+  for (int b = 0; b < 682; ++b) ASSERT_EQ(c2.points[2 * 682 + b], g.origin(2, 3) + 2.345f * g.direction(2, 3, b)) << b;
   v.pop_back();
   EXPECT_THROW(assemblePlane(c, g, 1, 2, v), std::invalid_argument);
 }
@@ -119,7 +118,7 @@ TEST(Driver, CleanScanLiesOnTheRoomSurfaces) {
     if (!p.allFinite()) continue;
     const double wx = s.robot_x + c * p.x() - sn * p.y(), wy = s.robot_y + sn * p.x() + c * p.y(), wz = p.z();
     const double d = std::min({std::abs(wx - s.x_min), std::abs(wx - s.x_max), std::abs(wy - s.y_min),
-                              std::abs(wy - s.y_max), std::abs(wz), std::abs(wz - s.z_max)});
+                               std::abs(wy - s.y_max), std::abs(wz), std::abs(wz - s.z_max)});
     ASSERT_LT(d, 0.0012) << p.transpose();
     ++checked;
   }
@@ -406,7 +405,8 @@ TEST(Standstill, ThresholdsAreValidatedWithTheParameterName) {
     ADD_FAILURE() << "accepted a negative threshold";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("'standstill/max_linear_speed_mps' = -1 m/s is out of range [0, 0.5 m/s]"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
   c = StandstillConfig();
   c.max_angular_speed_radps = std::nan("");

@@ -25,7 +25,8 @@ Reply readReply(const std::string& bytes, const std::string& echo, bool kv = fal
 
 TEST(Scip, PrecomputedStatusSums) {
   // PROTOCOL_FACTS 1.2: 00P 99b 01Q 02R 03S 04T 05U 10Q 0Aa 0Bb 0Cc 0Dd 0Ee 0Ff
-  for (const char* s : {"00P", "99b", "01Q", "02R", "03S", "04T", "05U", "10Q", "0Aa", "0Bb", "0Cc", "0Dd", "0Ee", "0Ff"}) {
+  for (const char* s :
+       {"00P", "99b", "01Q", "02R", "03S", "04T", "05U", "10Q", "0Aa", "0Bb", "0Cc", "0Dd", "0Ee", "0Ff"}) {
     const std::string line(s);
     EXPECT_EQ(withSum(line.substr(0, 2)), line);
     EXPECT_TRUE(checkSum(line)) << line;
@@ -59,8 +60,8 @@ TEST(Scip, ValueEncodingExamples) {
   EXPECT_EQ(v, 5432u);
   ASSERT_TRUE(decodeValue("m2@0", &v));
   EXPECT_EQ(v, 16000000u);
-  EXPECT_FALSE(decodeValue("0/X", &v));   // '/' < 0x30
-  EXPECT_FALSE(decodeValue("0pX", &v));   // 'p' > 0x6F
+  EXPECT_FALSE(decodeValue("0/X", &v));  // '/' < 0x30
+  EXPECT_FALSE(decodeValue("0pX", &v));  // 'p' > 0x6F
   EXPECT_FALSE(decodeValue("", &v));
   EXPECT_FALSE(decodeValue("00000", &v));
   EXPECT_THROW(encodeValue(4096, 2), std::invalid_argument);
@@ -153,7 +154,7 @@ TEST(Scip, MdStreamsUntilItsCountOrQt) {
     EXPECT_EQ(decodeScanReply(as_gd, 44, 725, 1).values[0], 1044u);
   }
   EXPECT_FALSE(urg.streaming());
-  EXPECT_FALSE(urg.laserOn());  // off after the last scan
+  EXPECT_FALSE(urg.laserOn());                                                     // off after the last scan
   EXPECT_EQ(urg.handleLine("MD0044072501000").bytes, "MD0044072501000\n00P\n\n");  // endless
   for (int k = 0; k < 5; ++k) EXPECT_FALSE(urg.nextStreamScan().bytes.empty());
   EXPECT_EQ(urg.handleLine("QT").bytes, "QT\n00P\n\n");
@@ -260,8 +261,8 @@ TEST(Scip, DecodeRejectsMalformedBlocks) {
     }
     return ScipError::Kind::kDisconnected;  // "no error"
   };
-  EXPECT_EQ(kindOf("GD0384038601\n00P\n01>8G\n\n", 384, 386), ScipError::Kind::kFormat);         // no data
-  EXPECT_EQ(kindOf("GD0384038601\n00P\n0?X0CB1DhI\n\n", 384, 386), ScipError::Kind::kFormat);    // no time line
+  EXPECT_EQ(kindOf("GD0384038601\n00P\n01>8G\n\n", 384, 386), ScipError::Kind::kFormat);              // no data
+  EXPECT_EQ(kindOf("GD0384038601\n00P\n0?X0CB1DhI\n\n", 384, 386), ScipError::Kind::kFormat);         // no time line
   EXPECT_EQ(kindOf("GD0384038701\n00P\n01>8G\n0?X0CB1DhI\n\n", 384, 387), ScipError::Kind::kFormat);  // short
   EXPECT_EQ(kindOf("GD0044072501\n10Q\n\n", 44, 725), ScipError::Kind::kStatus);
   EXPECT_EQ(kindOf("GD0044072501\nE\n\n", 44, 725), ScipError::Kind::kScip11);
@@ -386,7 +387,7 @@ TEST(Scene, BoxRoomDistances) {
   // Step 128 points along -x in plane 0.
   EXPECT_EQ(room.value(0.0, 128), 3000u);
   room.dark_patch = true;
-  EXPECT_EQ(room.value(0.0, 600), 1u);  // 13.9 deg up: hits x = 3 m at z = 1.20 m, in the patch
+  EXPECT_EQ(room.value(0.0, 600), 1u);     // 13.9 deg up: hits x = 3 m at z = 1.20 m, in the patch
   EXPECT_EQ(room.value(0.0, 590), 3147u);  // 17.6 deg up: z = 1.40 m, just above it
   room.robot_x = 5.0;
   EXPECT_THROW(room.validate(), std::invalid_argument);

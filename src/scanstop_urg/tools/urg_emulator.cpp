@@ -29,9 +29,7 @@ namespace {
 volatile sig_atomic_t g_stop = 0;
 void onSignal(int) { g_stop = 1; }
 
-double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double now_s() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 void usage() {
   std::fprintf(stderr,
@@ -73,9 +71,7 @@ std::vector<double> parseList(const std::string& text, size_t n, const char* wha
   return v;
 }
 
-double parseNumber(const std::string& text, const char* what) {
-  return parseList(text, 1, what)[0];
-}
+double parseNumber(const std::string& text, const char* what) { return parseList(text, 1, what)[0]; }
 
 /// One pseudo-terminal: the master side is the device; the slave (symlinked) is the port.
 struct Pty {
@@ -156,22 +152,32 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--link") urg_pty.link = next();
-    else if (a == "--platform-link") platform_pty.link = next();
-    else if (a == "--control") control_path = next();
-    else if (a == "--scan-period") scan_period = parseNumber(next(), "--scan-period");
+    if (a == "--link")
+      urg_pty.link = next();
+    else if (a == "--platform-link")
+      platform_pty.link = next();
+    else if (a == "--control")
+      control_path = next();
+    else if (a == "--scan-period")
+      scan_period = parseNumber(next(), "--scan-period");
     else if (a == "--room") {
       const auto v = parseList(next(), 5, "--room");
       scene.x_min = v[0], scene.x_max = v[1], scene.y_min = v[2], scene.y_max = v[3], scene.z_max = v[4];
     } else if (a == "--robot") {
       const auto v = parseList(next(), 3, "--robot");
       scene.robot_x = v[0], scene.robot_y = v[1], scene.robot_yaw = v[2];
-    } else if (a == "--height") scene.scanner_height = parseNumber(next(), "--height");
-    else if (a == "--x-offset") scene.scanner_x_offset = parseNumber(next(), "--x-offset");
-    else if (a == "--mount-offset") scene.mount_offset = parseNumber(next(), "--mount-offset");
-    else if (a == "--no-dark-patch") scene.dark_patch = false;
-    else if (a == "--boot-scip2") boot_scip2 = true;
-    else if (a == "--stale-stream") stale_stream = true;
+    } else if (a == "--height")
+      scene.scanner_height = parseNumber(next(), "--height");
+    else if (a == "--x-offset")
+      scene.scanner_x_offset = parseNumber(next(), "--x-offset");
+    else if (a == "--mount-offset")
+      scene.mount_offset = parseNumber(next(), "--mount-offset");
+    else if (a == "--no-dark-patch")
+      scene.dark_patch = false;
+    else if (a == "--boot-scip2")
+      boot_scip2 = true;
+    else if (a == "--stale-stream")
+      stale_stream = true;
     else if (a == "-h" || a == "--help") {
       usage();
       return 0;
@@ -321,9 +327,8 @@ int main(int argc, char** argv) {
       if (p.fd == control) {
         control_splitter.feed(buf, static_cast<size_t>(n), handleControl);
       } else if (p.fd == platform_pty.master) {
-        platform_pty.splitter.feed(buf, static_cast<size_t>(n), [&](const std::string& line) {
-          platform_pty.send(stepper.handleLine(line));
-        });
+        platform_pty.splitter.feed(buf, static_cast<size_t>(n),
+                                   [&](const std::string& line) { platform_pty.send(stepper.handleLine(line)); });
       } else if (p.fd == urg_pty.master) {
         urg_pty.splitter.feed(buf, static_cast<size_t>(n), [&](const std::string& line) {
           if (now_s() < silence_until) return;  // silent: commands are lost

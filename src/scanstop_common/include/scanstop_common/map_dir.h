@@ -26,12 +26,12 @@ namespace scanstop {
 /// One scan's entry in poses.csv.
 struct MapScanInfo {
   uint32_t index = 0;
-  std::string file;                  ///< relative to the map directory, e.g. "scans/scan_0003.pcd"
-  double stamp_s = 0.0;              ///< scan time [s]
-  Pose2D map_pose;                   ///< corrected pose of base_link in the map frame
-  Pose2D odom_pose;                  ///< odometry pose of base_link in the odom frame
+  std::string file;      ///< relative to the map directory, e.g. "scans/scan_0003.pcd"
+  double stamp_s = 0.0;  ///< scan time [s]
+  Pose2D map_pose;       ///< corrected pose of base_link in the map frame
+  Pose2D odom_pose;      ///< odometry pose of base_link in the odom frame
   Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();  ///< scanner centre in base_link [m]
-  bool converged = true;             ///< false: registration failed, the odometry-based pose was kept
+  bool converged = true;  ///< false: registration failed, the odometry-based pose was kept
   uint32_t iterations = 0;
   uint32_t correspondences = 0;
   double rms_m = 0.0;

@@ -44,7 +44,7 @@ class MasterWatchdog {
   std::string uri_;
   double timeout_s_;
   State state_ = State::Ok;
-  bool seen_ = false;      ///< a check has run
+  bool seen_ = false;       ///< a check has run
   double last_ok_s_ = 0.0;  ///< the last check that reached the master (or the first check)
   double lost_since_s_ = 0.0;
   long pid_ = -1;  ///< the master's pid when first known

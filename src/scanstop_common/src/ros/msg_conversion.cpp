@@ -102,7 +102,8 @@ PointCloud fromMsg(const sensor_msgs::PointCloud2& msg) {
     throw std::invalid_argument("PointCloud2 row_step " + std::to_string(msg.row_step) +
                                 " is smaller than width x point_step");
   if (msg.data.size() < static_cast<size_t>(msg.row_step) * msg.height)
-    throw std::invalid_argument("PointCloud2 data has " + std::to_string(msg.data.size()) + " bytes, the layout needs " +
+    throw std::invalid_argument("PointCloud2 data has " + std::to_string(msg.data.size()) +
+                                " bytes, the layout needs " +
                                 std::to_string(static_cast<size_t>(msg.row_step) * msg.height));
   PointCloud cloud;
   cloud.points.resize(n);
@@ -112,8 +113,9 @@ PointCloud fromMsg(const sensor_msgs::PointCloud2& msg) {
       const uint8_t* p =
           msg.data.data() + static_cast<size_t>(row) * msg.row_step + static_cast<size_t>(col) * msg.point_step;
       const size_t i = static_cast<size_t>(row) * msg.width + col;
-      cloud.points[i] = Eigen::Vector3f(readValue(p + fx->offset, fx->datatype), readValue(p + fy->offset, fy->datatype),
-                                        readValue(p + fz->offset, fz->datatype));
+      cloud.points[i] =
+          Eigen::Vector3f(readValue(p + fx->offset, fx->datatype), readValue(p + fy->offset, fy->datatype),
+                          readValue(p + fz->offset, fz->datatype));
       if (fr) cloud.ranges[i] = readValue(p + fr->offset, fr->datatype);
     }
   }

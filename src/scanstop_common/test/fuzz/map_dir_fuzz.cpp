@@ -33,7 +33,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   scanstop::fuzz::writeBytes(dir + "/poses.csv", data + 2, poses);
   scanstop::fuzz::writeBytes(dir + "/scans/scan_0001.pcd", data + 2 + poses, size - 2 - poses);
   scanstop::MapDirectory map(dir);  // must not throw: poses.csv is a regular, readable file
-  for (const auto& p : map.problems()) check(p.path.compare(0, dir.size(), dir) == 0, "a problem names a file of the map");
+  for (const auto& p : map.problems())
+    check(p.path.compare(0, dir.size(), dir) == 0, "a problem names a file of the map");
   for (size_t i = 0; i < map.size(); ++i) {
     check(map.scans()[i].index < map.nextIndex(), "kept indices are below nextIndex()");
     check(i == 0 || map.scans()[i - 1].index < map.scans()[i].index, "kept indices increase");

@@ -11,7 +11,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using scanstop::fuzz::check;
   try {
-    const scanstop::TriangleMesh mesh = scanstop::parsePly(std::string(reinterpret_cast<const char*>(data), size), "fuzz.ply");
+    const scanstop::TriangleMesh mesh =
+        scanstop::parsePly(std::string(reinterpret_cast<const char*>(data), size), "fuzz.ply");
     check(mesh.normals.empty() || mesh.normals.size() == mesh.vertices.size(), "one normal per vertex or none");
     for (const auto& f : mesh.faces)
       for (int k = 0; k < 3; ++k)

@@ -11,7 +11,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using scanstop::fuzz::check;
   try {
-    const scanstop::TriangleMesh mesh = scanstop::parseStl(std::string(reinterpret_cast<const char*>(data), size), "fuzz.stl");
+    const scanstop::TriangleMesh mesh =
+        scanstop::parseStl(std::string(reinterpret_cast<const char*>(data), size), "fuzz.stl");
     check(!mesh.faces.empty(), "an STL that parses has triangles");
     check(mesh.vertices.size() == 3 * mesh.faces.size(), "an STL is a soup of three vertices per face");
     for (const auto& v : mesh.vertices) check(v.allFinite(), "STL vertices are finite");

@@ -11,7 +11,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using scanstop::fuzz::check;
   try {
-    const scanstop::PointCloud cloud = scanstop::parseXyz(std::string(reinterpret_cast<const char*>(data), size), "fuzz.xyz");
+    const scanstop::PointCloud cloud =
+        scanstop::parseXyz(std::string(reinterpret_cast<const char*>(data), size), "fuzz.xyz");
     check(!cloud.empty(), "an XYZ file that parses has points");
     check(cloud.layoutProblem().empty(), "consistent cloud layout");
     check(!cloud.isOrganized(), "XYZ clouds are unorganized");

@@ -1,8 +1,8 @@
 #pragma once
-/// Ground-truth floor coverage in simulation (evaluation, not exploration: the explorer never sees it): which share of the floor the robot could really
-/// reach (from the world mesh) did the explorer's floor map observe? The explorer's own `coverage`
-/// only counts cells it can reach in its own map: a door it wrongly thinks closed hides the rooms
-/// behind it and still gives 100 %.
+/// Ground-truth floor coverage in simulation (evaluation, not exploration: the explorer never sees it): which share of
+/// the floor the robot could really reach (from the world mesh) did the explorer's floor map observe? The explorer's
+/// own `coverage` only counts cells it can reach in its own map: a door it wrongly thinks closed hides the rooms behind
+/// it and still gives 100 %.
 
 #include <opencv2/core.hpp>
 
@@ -43,12 +43,12 @@ ReachableFloor reachableFloor(const TriangleMesh& world, const Pose2D& start_wor
                               double resolution = 0.05, double z_lo = 0.03, double z_hi = 0.63);
 
 struct GroundTruthCoverage {
-  double reachable_m2 = 0.0;  ///< true reachable floor (cells the robot disc can sweep from the start)
-  double observed_m2 = 0.0;   ///< of it, floor in the explorer's map (within tolerance)
-  double coverage = 0.0;      ///< observed / reachable
-  size_t scans = 0;           ///< scans of the map (groundTruthCoverageOfMap; 0 otherwise)
-  double robot_radius_m = 0.0;  ///< the robot disc the reachable floor was swept with [m]
-  GridGeometry geometry;      ///< world frame grid of the masks
+  double reachable_m2 = 0.0;              ///< true reachable floor (cells the robot disc can sweep from the start)
+  double observed_m2 = 0.0;               ///< of it, floor in the explorer's map (within tolerance)
+  double coverage = 0.0;                  ///< observed / reachable
+  size_t scans = 0;                       ///< scans of the map (groundTruthCoverageOfMap; 0 otherwise)
+  double robot_radius_m = 0.0;            ///< the robot disc the reachable floor was swept with [m]
+  GridGeometry geometry;                  ///< world frame grid of the masks
   cv::Mat obstacle, reachable, observed;  ///< CV_8U 0/1
 };
 

@@ -31,9 +31,9 @@ std::optional<size_t> bestPairCoverage(const std::vector<ElementSet>& sets, size
 
 /// How many scans reach a share of the total.
 struct CoverTarget {
-  double share = 0.0;            ///< e.g. 0.99
-  std::optional<size_t> scans;   ///< none: no choice of sets reaches it
-  bool optimal = false;          ///< no fewer sets can reach it (greedy's 1 or 2, or a pair check)
+  double share = 0.0;           ///< e.g. 0.99
+  std::optional<size_t> scans;  ///< none: no choice of sets reaches it
+  bool optimal = false;         ///< no fewer sets can reach it (greedy's 1 or 2, or a pair check)
 };
 
 /// The scans needed for each share of `total` elements: the greedy count, and 2 instead when the

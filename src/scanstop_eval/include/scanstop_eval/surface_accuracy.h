@@ -65,7 +65,7 @@ SurfaceSamples sampleMeshSurface(const TriangleMesh& mesh, double spacing_m);
 /// Distribution of distances, optionally weighted (area of mesh samples); quantiles are the smallest
 /// distance whose cumulative weight reaches the share.
 struct DistanceStats {
-  size_t count = 0;              ///< finite distances
+  size_t count = 0;  ///< finite distances
   double median_m = 0.0, mean_m = 0.0, rms_m = 0.0, p95_m = 0.0, max_m = 0.0;
   std::vector<double> within_m;  ///< thresholds [m] ...
   std::vector<double> share;     ///< ... and the (weighted) share of distances at or below each [0..1]
@@ -98,20 +98,20 @@ AccuracyInput loadAccuracyInput(const std::string& path, bool skip_bad = false);
 const char* kindName(AccuracyInput::Kind kind);
 
 struct AccuracyConfig {
-  double sample_spacing_m = 0.01;   ///< spacing of a mesh's face samples [m], > 0
-  double tolerance_m = 0.03;        ///< coverage tolerance [m], [0, the visible surface's element]
+  double sample_spacing_m = 0.01;  ///< spacing of a mesh's face samples [m], > 0
+  double tolerance_m = 0.03;       ///< coverage tolerance [m], [0, the visible surface's element]
   std::vector<double> within_m = {0.01, 0.02, 0.03, 0.05};  ///< thresholds of the shares [m]
 };
 
 struct SurfaceAccuracy {
-  size_t triangles = 0, vertices = 0;     ///< the mesh's (0 for points)
-  size_t points = 0;                      ///< the cloud's or the map's finite points (0 for a mesh)
-  size_t samples = 0;                     ///< face samples of a mesh
-  double area_m2 = 0.0;                   ///< the mesh's area
-  DistanceStats vertex_distance;          ///< a mesh: its vertices; points: the points
-  DistanceStats surface_distance;         ///< a mesh: area-weighted face samples; points: = vertex_distance
-  size_t visible = 0, covered = 0;        ///< visible surface elements, of them within tolerance
-  double coverage = 0.0;                  ///< covered / visible [0..1] (0 without a visible surface)
+  size_t triangles = 0, vertices = 0;         ///< the mesh's (0 for points)
+  size_t points = 0;                          ///< the cloud's or the map's finite points (0 for a mesh)
+  size_t samples = 0;                         ///< face samples of a mesh
+  double area_m2 = 0.0;                       ///< the mesh's area
+  DistanceStats vertex_distance;              ///< a mesh: its vertices; points: the points
+  DistanceStats surface_distance;             ///< a mesh: area-weighted face samples; points: = vertex_distance
+  size_t visible = 0, covered = 0;            ///< visible surface elements, of them within tolerance
+  double coverage = 0.0;                      ///< covered / visible [0..1] (0 without a visible surface)
   double distance_s = 0.0, coverage_s = 0.0;  ///< wall time [s]
 };
 

@@ -28,8 +28,8 @@ class SurfaceCoverage {
   void add(const std::vector<Eigen::Vector3f>& points_world);
 
   size_t visible() const { return visible_.visible_count; }
-  size_t covered() const { return covered_; }        ///< visible elements held by the map
-  size_t points() const { return points_; }          ///< finite points added
+  size_t covered() const { return covered_; }  ///< visible elements held by the map
+  size_t points() const { return points_; }    ///< finite points added
   /// covered / visible [0..1]; 0 when nothing is visible.
   double share() const;
 
@@ -45,11 +45,11 @@ class SurfaceCoverage {
 /// optimized, poses.csv), taken into the world frame by world_T_map (the map frame's pose in the
 /// world: the simulated start). Scans that fail to load are skipped and named in `problems`.
 struct MapSurfaceCoverage {
-  size_t scans = 0;          ///< scans added
-  size_t points = 0;         ///< their finite points
-  size_t visible = 0;        ///< visible surface elements
-  size_t covered = 0;        ///< of them, held by the map
-  double share = 0.0;        ///< covered / visible [0..1]
+  size_t scans = 0;    ///< scans added
+  size_t points = 0;   ///< their finite points
+  size_t visible = 0;  ///< visible surface elements
+  size_t covered = 0;  ///< of them, held by the map
+  double share = 0.0;  ///< covered / visible [0..1]
 };
 MapSurfaceCoverage mapSurfaceCoverage(const VisibleSurface& visible, const MapDirectory& map, const Pose2D& world_T_map,
                                       double tolerance_m, std::vector<std::string>* problems = nullptr);

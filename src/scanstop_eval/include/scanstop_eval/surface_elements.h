@@ -54,9 +54,9 @@ class SurfaceElements {
   float cell_ = 0.05f;
   Eigen::Vector3f origin_ = Eigen::Vector3f::Zero();
   int dims_[3] = {0, 0, 0};
-  std::vector<int32_t> grid_;               ///< cube -> element id, -1 empty
-  std::vector<Eigen::Vector3f> points_;     ///< representative per element
-  std::vector<float> centre_distance2_;     ///< its squared distance to the cube's centre
+  std::vector<int32_t> grid_;            ///< cube -> element id, -1 empty
+  std::vector<Eigen::Vector3f> points_;  ///< representative per element
+  std::vector<float> centre_distance2_;  ///< its squared distance to the cube's centre
 };
 
 }  // namespace eval

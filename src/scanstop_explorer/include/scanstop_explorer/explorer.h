@@ -26,11 +26,12 @@ struct ExplorerConfig {
   /// under and near the robot (a 240 deg fan turned about the vertical axis misses a cone of
   /// half-angle 60 deg below it: radius = scanner height * tan(60 deg), 0.78 m at 0.45 m) [m], [0, 5]
   double known_free_radius_m = 0.8;
-  double self_filter_radius_m = 0.3;  ///< points closer than this to the scan pose (horizontally) are the robot itself [m], [0, 5]
-  double target_tolerance_m = 0.3;    ///< robot this close to the last target: it was reached [m], (0, 10]
-  double progress_m = 0.2;            ///< the travel distance to an unreached target must shrink by this per plan [m], [0, 10]
-  int max_failed_attempts = 2;        ///< plans without progress before a target is blacklisted, [1, 100]
-  double blacklist_radius_m = 0.5;    ///< radius of the blacklisted disc around a failed target [m], (0, 10]
+  double self_filter_radius_m =
+      0.3;  ///< points closer than this to the scan pose (horizontally) are the robot itself [m], [0, 5]
+  double target_tolerance_m = 0.3;  ///< robot this close to the last target: it was reached [m], (0, 10]
+  double progress_m = 0.2;  ///< the travel distance to an unreached target must shrink by this per plan [m], [0, 10]
+  int max_failed_attempts = 2;      ///< plans without progress before a target is blacklisted, [1, 100]
+  double blacklist_radius_m = 0.5;  ///< radius of the blacklisted disc around a failed target [m], (0, 10]
   /// A contact (where the robot touched something the scans did not show as an obstacle) becomes an
   /// obstacle disc of this radius in every later plan, unless the caller gives the contact its own
   /// radius (the mission does for a contact located at a scanned point); the planner's inflation by
@@ -47,8 +48,8 @@ class Explorer {
 
   /// Adds one registered scan: points in the map frame (z = 0 is the floor) [m], base_link pose
   /// in the map frame. Points within self_filter_radius_m of the pose are dropped (the robot's own
-  /// body and the scanner's near-range noise). Each index is used once: returns false (and changes nothing) for an index
-  /// that was added before.
+  /// body and the scanner's near-range noise). Each index is used once: returns false (and changes nothing) for an
+  /// index that was added before.
   bool addScan(uint32_t index, const Pose2D& T_map_base, const std::vector<Eigen::Vector3f>& points_map);
   /// Adds every scan of a map directory that is not in yet. Returns how many were added. A scan
   /// file that cannot be read (missing, truncated, corrupt) is skipped and its problem, naming the

@@ -28,7 +28,7 @@ struct NodeConfig {
   /// a registered scan with a point farther than this from its pose is dropped (it would blow up
   /// the floor grid) [m], [0.1, 1000]
   double max_point_distance_m = 100.0;
-  int max_unreachable = 10000;   ///< most unreachable points one request may carry, [0, 1e6]
+  int max_unreachable = 10000;  ///< most unreachable points one request may carry, [0, 1e6]
 };
 
 /// Why a plan_next request cannot be served, or "" when it can: map_pose in another frame than

@@ -33,30 +33,30 @@ int removeObstacleSpeckle(cv::Mat& obstacle, const cv::Mat& max_points, int min_
 
 /// Parameters of the floor extraction.
 struct FloorConfig {
-  double resolution_m = 0.05;     ///< grid cell edge [m], (0.005, 1]
-  double floor_layer_m = 0.06;    ///< d_floor: thickness of the floor layer centred on z = 0 [m], (0, 0.5]
-  double robot_height_m = 0.6;    ///< d_robot: thickness of the obstacle layer above the floor layer [m], (0, 5]
-  double grid_margin_m = 1.0;          ///< unknown margin kept around the data when the grid grows [m], [0, 20]
-  int min_floor_points = 1;       ///< floor points a cell needs to count as floor, [1, 1000]
-  int min_obstacle_points = 2;    ///< obstacle-layer points ONE scan must put into a cell to make it an
-                                  ///< obstacle (real obstacles give many per scan, random outlier
-                                  ///< ranges rarely two in one cell), [1, 1000]
-  int speckle_min_points = 5;     ///< speckle removal: an obstacle component (8-connected) of at most
-                                  ///< speckle_max_cells cells none of whose cells got this many
-                                  ///< obstacle-layer points from one scan is a stray reading (noise,
-                                  ///< a random range) and not an obstacle; a real thin obstacle (table
-                                  ///< leg) gives many points per scan or spreads over more cells;
-                                  ///< <= min_obstacle_points: off, [1, 1000]
-  int speckle_max_cells = 2;      ///< largest component that can be speckle, [1, 100]
+  double resolution_m = 0.05;   ///< grid cell edge [m], (0.005, 1]
+  double floor_layer_m = 0.06;  ///< d_floor: thickness of the floor layer centred on z = 0 [m], (0, 0.5]
+  double robot_height_m = 0.6;  ///< d_robot: thickness of the obstacle layer above the floor layer [m], (0, 5]
+  double grid_margin_m = 1.0;   ///< unknown margin kept around the data when the grid grows [m], [0, 20]
+  int min_floor_points = 1;     ///< floor points a cell needs to count as floor, [1, 1000]
+  int min_obstacle_points = 2;  ///< obstacle-layer points ONE scan must put into a cell to make it an
+                                ///< obstacle (real obstacles give many per scan, random outlier
+                                ///< ranges rarely two in one cell), [1, 1000]
+  int speckle_min_points = 5;   ///< speckle removal: an obstacle component (8-connected) of at most
+                                ///< speckle_max_cells cells none of whose cells got this many
+                                ///< obstacle-layer points from one scan is a stray reading (noise,
+                                ///< a random range) and not an obstacle; a real thin obstacle (table
+                                ///< leg) gives many points per scan or spreads over more cells;
+                                ///< <= min_obstacle_points: off, [1, 1000]
+  int speckle_max_cells = 2;    ///< largest component that can be speckle, [1, 100]
   /// Sparse obstacle evidence (issue #18 point 2): a cell into which this many different scans
   /// each put at least one obstacle-layer point is an obstacle too, even when no single scan put
   /// min_obstacle_points there (an overhanging table edge or sofa arm seen at grazing angles, an
   /// underside facing away). Isolated cells still pass the speckle rule. 0 = off, [0, 1000]
   int min_obstacle_scans = 3;
-  double max_extent_m = 500.0;    ///< points farther than this from the origin are ignored [m], (0, 1e4]
-  double floor_fill_radius_m = 0.1;     ///< unknown gaps in the floor narrower than twice this become floor
-                                  ///< (morphological closing of the floor over unknown cells only;
-                                  ///< 0 = off, the thesis' plain extraction) [m], [0, 1]
+  double max_extent_m = 500.0;       ///< points farther than this from the origin are ignored [m], (0, 1e4]
+  double floor_fill_radius_m = 0.1;  ///< unknown gaps in the floor narrower than twice this become floor
+                                     ///< (morphological closing of the floor over unknown cells only;
+                                     ///< 0 = off, the thesis' plain extraction) [m], [0, 1]
 
   /// Throws ConfigError naming the parameter, its value and the allowed range.
   void validate() const;

@@ -12,15 +12,13 @@ namespace explorer {
 
 /// Placement of a grid in the map frame.
 struct GridGeometry {
-  double origin_x = 0.0;    ///< x of the lower-left corner of cell (0, 0) [m]
-  double origin_y = 0.0;    ///< y of the lower-left corner of cell (0, 0) [m]
-  double resolution = 0.05; ///< cell edge [m]
-  int width = 0;            ///< columns (x)
-  int height = 0;           ///< rows (y)
+  double origin_x = 0.0;     ///< x of the lower-left corner of cell (0, 0) [m]
+  double origin_y = 0.0;     ///< y of the lower-left corner of cell (0, 0) [m]
+  double resolution = 0.05;  ///< cell edge [m]
+  int width = 0;             ///< columns (x)
+  int height = 0;            ///< rows (y)
 
-  bool contains(const cv::Point& cell) const {
-    return cell.x >= 0 && cell.y >= 0 && cell.x < width && cell.y < height;
-  }
+  bool contains(const cv::Point& cell) const { return cell.x >= 0 && cell.y >= 0 && cell.x < width && cell.y < height; }
   /// The cell holding map point (x, y) [m] (may lie outside the grid).
   cv::Point cellOf(double x_m, double y_m) const;
   /// Centre of a cell in the map frame [m].

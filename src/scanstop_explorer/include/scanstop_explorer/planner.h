@@ -18,13 +18,13 @@ namespace explorer {
 
 /// Parameters of a planning step. Defaults are the thesis' (5.4) where it gives them.
 struct PlannerConfig {
-  double robot_radius_m = 0.3;         ///< floor closer than this to a non-floor cell is not accessible [m], (0, 5]
-  double d_max_m = 2.0;                ///< longest straight movement [m], (0, 50]
-  double k_r_m = 1.0;                  ///< knowledge enhancement radius of a scan [m], (0, 50]
-  double k0 = 1.0;                     ///< knowledge offset in b, (0, 1e6]
-  double c0 = 3.0;                     ///< cost offset in b [m], (0, 1e6]
-  double knowledge_threshold = 1.0;    ///< a cell lacks knowledge when k < this, (0, 1e6]
-  double frontier_distance_m = 0.5;    ///< a cell borders unknown space when a frontier cell is this close [m], (0, 50]
+  double robot_radius_m = 0.3;       ///< floor closer than this to a non-floor cell is not accessible [m], (0, 5]
+  double d_max_m = 2.0;              ///< longest straight movement [m], (0, 50]
+  double k_r_m = 1.0;                ///< knowledge enhancement radius of a scan [m], (0, 50]
+  double k0 = 1.0;                   ///< knowledge offset in b, (0, 1e6]
+  double c0 = 3.0;                   ///< cost offset in b [m], (0, 1e6]
+  double knowledge_threshold = 1.0;  ///< a cell lacks knowledge when k < this, (0, 1e6]
+  double frontier_distance_m = 0.5;  ///< a cell borders unknown space when a frontier cell is this close [m], (0, 50]
   /// Occluded frontiers (termination and targets): a reached cell near a frontier cell that no scan
   /// within k_r_m has in plain sight (straight line over floor cells only; e.g. the part of a
   /// corridor hidden behind the door jambs) stays open until its knowledge reaches this value,
@@ -42,7 +42,7 @@ struct PlannerConfig {
   /// frontier: it sits in or behind a wall (a wall base's floor cell, a noisy wall's outer face),
   /// not at the edge of a view into unknown space. false: the plain definition.
   bool ignore_wall_base_frontier = true;
-  double start_snap_m = 0.5;           ///< robot off the accessible floor: join it within this distance [m], [0, 5]
+  double start_snap_m = 0.5;  ///< robot off the accessible floor: join it within this distance [m], [0, 5]
   /// A chosen target (new scan location or goal) closer than this to a non-floor cell moves to the
   /// nearest reached, not blacklisted cell at least this far from one, if there is one within this
   /// distance of it; otherwise it stays (a door or narrow passage keeps its target). The path's
@@ -50,7 +50,7 @@ struct PlannerConfig {
   /// right at the accessible border leaves the robot robot_radius_m minus its own radius against
   /// the drift of that leg. 0: off (the thesis' argmax as it is) [m], [0, 5]
   double target_clearance_m = 0.0;
-  int max_coverage_landmarks = 2000;   ///< bound on the landmarks added for cells no landmark sees, [0, 1e6]
+  int max_coverage_landmarks = 2000;  ///< bound on the landmarks added for cells no landmark sees, [0, 1e6]
   /// What a scan adds to the knowledge map: "disc" (thesis 5.4: 1 to every cell within k_r_m) or
   /// "visibility" (1 to every cell in its plain sight within k_r_m: rays over the floor grid, stopped
   /// by obstacle cells; a cell behind a cabinet gets nothing).
@@ -121,8 +121,8 @@ std::vector<int> dijkstra(const Graph& graph, const std::vector<std::pair<int, d
 /// Cost map: travel distance [cells] of every accessible cell reachable by a path robot ->
 /// landmarks -> cell (each leg clear and <= d_max), and the node the last leg starts from.
 struct CostMap {
-  cv::Mat cost;             ///< CV_32F [cells], +inf where unreached
-  cv::Mat predecessor;      ///< CV_32S node index, -1 where unreached
+  cv::Mat cost;         ///< CV_32F [cells], +inf where unreached
+  cv::Mat predecessor;  ///< CV_32S node index, -1 where unreached
   std::vector<Landmark> nodes;
   Graph graph;
   std::vector<double> node_dist;  ///< [cells], +inf unreached
@@ -134,8 +134,8 @@ struct CostMap {
 /// reached cell next to them becomes a node, repeated until the component is covered (or
 /// max_coverage_landmarks), so a donut-shaped floor with no anchor seeing a cell still works.
 /// `robot_pos` is in continuous cell coordinates and must lie in an accessible cell.
-CostMap computeCostMap(const cv::Mat& accessible, const std::vector<Landmark>& landmarks, const Eigen::Vector2d& robot_pos,
-                       double d_max_cells, int max_coverage_landmarks);
+CostMap computeCostMap(const cv::Mat& accessible, const std::vector<Landmark>& landmarks,
+                       const Eigen::Vector2d& robot_pos, double d_max_cells, int max_coverage_landmarks);
 
 /// Knowledge map (thesis 5.4): each scan position adds 1 to every cell within k_r. CV_32F.
 /// (knowledge_model "visibility": visibilityKnowledgeMap(), visibility.h.)
@@ -186,10 +186,10 @@ cv::Mat openCells(const cv::Mat& states, const cv::Mat& cost_cells, const cv::Ma
 
 /// What a planning step needs.
 struct PlanInput {
-  cv::Mat states;                               ///< floor grid (CellState)
+  cv::Mat states;  ///< floor grid (CellState)
   GridGeometry geometry;
-  std::vector<Eigen::Vector2d> scan_positions;  ///< map-frame positions of all past scans [m]
-  Pose2D robot;                                 ///< current robot pose (map frame)
+  std::vector<Eigen::Vector2d> scan_positions;                ///< map-frame positions of all past scans [m]
+  Pose2D robot;                                               ///< current robot pose (map frame)
   std::vector<std::pair<Eigen::Vector2d, double>> blacklist;  ///< discs (centre [m], radius [m]) never chosen again
   /// Given: no new scan location; the target is the reached, not blacklisted cell nearest to this
   /// point [m] (e.g. the start, once exploration is complete), the path as usual. Termination and
@@ -208,7 +208,7 @@ struct PlanResult {
 
   cv::Mat states, sq_dt, accessible, anchors, skeleton_unpruned, skeleton, knowledge, blacklist, evaluation, open;
   cv::Mat occluded_frontier;  ///< frontier cells no scan within k_r has in plain sight (CV_8U; empty when off)
-  cv::Mat gain;               ///< target_score "gain": expected gain of the sampled candidates [m^2] (CV_32F; else empty)
+  cv::Mat gain;  ///< target_score "gain": expected gain of the sampled candidates [m^2] (CV_32F; else empty)
   CostMap cost_map;
 
   // the plan
@@ -220,16 +220,16 @@ struct PlanResult {
   std::vector<double> clearance_m;
   cv::Point target_cell{-1, -1};
   Eigen::Vector2d target = Eigen::Vector2d::Zero();
-  double score = 0.0;                 ///< b at the target (the argmax, before a target_clearance_m move)
-  double target_gain_m2 = -1.0;       ///< the chosen candidate's expected gain [m^2] (-1: not chosen by gain)
-  double target_moved_m = 0.0;        ///< how far target_clearance_m moved the target from the argmax [m]
-  double target_cost_m = 0.0;         ///< travel distance to the target [m]
+  double score = 0.0;            ///< b at the target (the argmax, before a target_clearance_m move)
+  double target_gain_m2 = -1.0;  ///< the chosen candidate's expected gain [m^2] (-1: not chosen by gain)
+  double target_moved_m = 0.0;   ///< how far target_clearance_m moved the target from the argmax [m]
+  double target_cost_m = 0.0;    ///< travel distance to the target [m]
 
   // termination and statistics
   bool complete = false;
   std::string complete_reason;
   size_t open_cells = 0;
-  double coverage = 0.0;              ///< reached cells with knowledge >= threshold / reached cells
+  double coverage = 0.0;  ///< reached cells with knowledge >= threshold / reached cells
   double floor_area_m2 = 0.0;
   double accessible_area_m2 = 0.0;
   double reachable_area_m2 = 0.0;
@@ -251,7 +251,8 @@ PlanResult planStep(const PlanInput& input, const PlannerConfig& config);
 /// (the surface may lie anywhere in its cell, the leg anywhere in the cells it crosses: never more
 /// than the true distance) [m], from the squared distance transform of the floor (cells^2); 0 where
 /// the segment leaves the floor or the grid.
-double legClearance(const cv::Mat& sq_dt, const GridGeometry& geometry, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+double legClearance(const cv::Mat& sq_dt, const GridGeometry& geometry, const Eigen::Vector2d& a,
+                    const Eigen::Vector2d& b);
 
 /// Rasterises blacklist discs on a grid. CV_8U 0/1.
 cv::Mat rasterizeDiscs(const GridGeometry& geometry, const std::vector<std::pair<Eigen::Vector2d, double>>& discs);

@@ -13,11 +13,11 @@ namespace scanstop {
 namespace explorer {
 
 /// Images of one step (BGR, north up, `scale` pixels per cell), in this order: "floor" (grey
-/// floor, red obstacles, black unknown, orange: open cells that keep exploration going), "distance" (distance transform of the accessible floor,
-/// skeleton in blue, anchors in yellow), "cost" (brighter = farther), "knowledge" (brighter = more), "evaluation"
-/// (brighter = better; the target is the brightest cell). Each has the robot (green), the
-/// landmarks (red), the path (cyan) and the target (magenta) drawn in. Below the map (rows
-/// scale * height and on) a white footer holds a scale bar and the legend of the image's colours.
+/// floor, red obstacles, black unknown, orange: open cells that keep exploration going), "distance" (distance transform
+/// of the accessible floor, skeleton in blue, anchors in yellow), "cost" (brighter = farther), "knowledge" (brighter =
+/// more), "evaluation" (brighter = better; the target is the brightest cell). Each has the robot (green), the landmarks
+/// (red), the path (cyan) and the target (magenta) drawn in. Below the map (rows scale * height and on) a white footer
+/// holds a scale bar and the legend of the image's colours.
 std::vector<std::pair<std::string, cv::Mat>> renderPlanImages(const PlanResult& result, int scale = 2);
 /// Writes <dir>/<prefix><name>.png for every image; throws IoError naming the file.
 void writePlanImages(const PlanResult& result, const std::string& dir, const std::string& prefix, int scale = 2);

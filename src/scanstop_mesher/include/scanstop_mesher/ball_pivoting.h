@@ -29,8 +29,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
-#include <memory>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -42,23 +42,23 @@ namespace mesher {
 
 /// Counters of one reconstruction (all passes).
 struct BpaStats {
-  size_t points = 0;            ///< input points (with a finite position and normal)
-  size_t used_points = 0;       ///< points that are a vertex of some triangle
+  size_t points = 0;       ///< input points (with a finite position and normal)
+  size_t used_points = 0;  ///< points that are a vertex of some triangle
   size_t triangles = 0;
-  size_t seeds = 0;             ///< seed triangles
-  size_t pivots = 0;            ///< pivot attempts
-  size_t joins = 0;             ///< triangles added by pivoting
+  size_t seeds = 0;                             ///< seed triangles
+  size_t pivots = 0;                            ///< pivot attempts
+  size_t joins = 0;                             ///< triangles added by pivoting
   std::array<size_t, 4> glue = {{0, 0, 0, 0}};  ///< glue cases 1..4 (thesis 7.3)
-  size_t refused_interior = 0;      ///< pivot reached a vertex inside the surface
-  size_t refused_edge = 0;          ///< the triangle would give an edge a 3rd face or a wrong direction
-  size_t pinches = 0;               ///< joins at a front vertex outside the pivot edge's fan
-  size_t dropped_triangles = 0;     ///< triangles dropped by mesh() at vertices still pinched
-  std::vector<size_t> triangles_per_radius;  ///< triangles after each pass
-  std::vector<double> seconds_per_radius;    ///< wall time of each pass [s] (with slabs: summed over slabs + seam)
-  int regions = 1;                  ///< slabs meshed in parallel (1 = sequential)
-  double region_seconds = 0.0;      ///< wall time of the parallel slab phase [s]
-  double seam_seconds = 0.0;        ///< wall time of merging and stitching the seams [s]
-  double mesh_seconds = 0.0;        ///< wall time of mesh(): dropping pinched fans, building the mesh [s]
+  size_t refused_interior = 0;                  ///< pivot reached a vertex inside the surface
+  size_t refused_edge = 0;                      ///< the triangle would give an edge a 3rd face or a wrong direction
+  size_t pinches = 0;                           ///< joins at a front vertex outside the pivot edge's fan
+  size_t dropped_triangles = 0;                 ///< triangles dropped by mesh() at vertices still pinched
+  std::vector<size_t> triangles_per_radius;     ///< triangles after each pass
+  std::vector<double> seconds_per_radius;       ///< wall time of each pass [s] (with slabs: summed over slabs + seam)
+  int regions = 1;                              ///< slabs meshed in parallel (1 = sequential)
+  double region_seconds = 0.0;                  ///< wall time of the parallel slab phase [s]
+  double seam_seconds = 0.0;                    ///< wall time of merging and stitching the seams [s]
+  double mesh_seconds = 0.0;                    ///< wall time of mesh(): dropping pinched fans, building the mesh [s]
 };
 
 /// One Ball Pivoting surface on a fixed point set. Call pivot(r) with increasing radii.
@@ -99,13 +99,13 @@ class BallPivoting {
 
  private:
   struct Edge {
-    int a, b;       ///< directed a -> b, as in its triangle (a, b, opp)
-    int opp;        ///< third vertex of the triangle
-    int next, prev; ///< neighbours in the loop
-    int loop;       ///< loop id
+    int a, b;                ///< directed a -> b, as in its triangle (a, b, opp)
+    int opp;                 ///< third vertex of the triangle
+    int next, prev;          ///< neighbours in the loop
+    int loop;                ///< loop id
     Eigen::Vector3d center;  ///< ball centre of the triangle for the current radius
-    int next_out;   ///< next front edge leaving the same vertex a (list per vertex), -1 at the end
-    uint8_t state;  ///< see .cpp
+    int next_out;            ///< next front edge leaving the same vertex a (list per vertex), -1 at the end
+    uint8_t state;           ///< see .cpp
   };
 
   /// A slab worker of `parent`: shares its points, grid and per-vertex arrays (its vertices are
@@ -161,10 +161,10 @@ class BallPivoting {
 
   std::vector<Edge> edges_;
   std::vector<int> loop_size_;
-  std::vector<int> active_;    ///< queue of edge ids (FIFO via head_)
+  std::vector<int> active_;  ///< queue of edge ids (FIFO via head_)
   size_t head_ = 0;
   std::vector<Eigen::Vector3i> faces_;
-  std::vector<int> pinched_;   ///< vertices that were pinched (some may have healed)
+  std::vector<int> pinched_;         ///< vertices that were pinched (some may have healed)
   std::vector<uint64_t> dir_edges_;  ///< hash set of directed edges (open addressing)
   size_t dir_edge_count_ = 0;
   double radius_ = 0.0;

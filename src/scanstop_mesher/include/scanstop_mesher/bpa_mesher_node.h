@@ -21,36 +21,36 @@ namespace mesher {
 
 /// Node parameters (private namespace); see the README section "bpa_mesher_node" for the table.
 struct MesherNodeConfig {
-  std::string map_dir;                 ///< map directory meshed when input_path is empty
-  std::string frame_id = "map";        ///< frame of the map, the meshes and the markers
-  std::string default_output;          ///< file written when output_path is empty ("" = required)
+  std::string map_dir;           ///< map directory meshed when input_path is empty
+  std::string frame_id = "map";  ///< frame of the map, the meshes and the markers
+  std::string default_output;    ///< file written when output_path is empty ("" = required)
   /// The only directory meshes may be written to (relative output paths are taken relative to it);
   /// "" = the directory of default_output, else the parent of map_dir (the run directory)
   std::string output_dir;
-  double max_coordinate_m = 10000.0;   ///< input points beyond this (any axis) are refused as absurd [m], [1, 1e6]
-  double map_voxel_m = 0.01;           ///< voxel [m] for the map when the request gives 0 (0 = none)
-  double normal_radius_m = 0.0;        ///< [m]; 0 = 3 x point spacing
+  double max_coordinate_m = 10000.0;  ///< input points beyond this (any axis) are refused as absurd [m], [1, 1e6]
+  double map_voxel_m = 0.01;          ///< voxel [m] for the map when the request gives 0 (0 = none)
+  double normal_radius_m = 0.0;       ///< [m]; 0 = 3 x point spacing
   int normal_min_neighbors = 5;
-  bool smooth = true;                  ///< move points onto their local plane when estimating normals
-  std::string color_mode = "height";   ///< "height" or "normal"
+  bool smooth = true;                 ///< move points onto their local plane when estimating normals
+  std::string color_mode = "height";  ///< "height" or "normal"
   int max_triangles_per_marker = 100000;
-  int max_display_triangles = 2000000; ///< larger meshes are shown by every k-th triangle (files keep all)
-  std::string load_mesh;               ///< mesh (.stl/.ply) to show ("" = none); reloaded when it changes
-  bool publish_map = false;            ///< publish map_dir's points, path, scan poses and base_link (viewing)
+  int max_display_triangles = 2000000;  ///< larger meshes are shown by every k-th triangle (files keep all)
+  std::string load_mesh;                ///< mesh (.stl/.ply) to show ("" = none); reloaded when it changes
+  bool publish_map = false;             ///< publish map_dir's points, path, scan poses and base_link (viewing)
   /// map_dir must hold a map (its poses.csv) when the node starts: viewing a finished run, where an
   /// empty view of a directory that holds no run would only puzzle the user (view_run.launch)
   bool require_map = false;
-  double map_cloud_voxel_m = 0.02;     ///< voxel [m] of the published map points (0 = all points)
+  double map_cloud_voxel_m = 0.02;  ///< voxel [m] of the published map points (0 = all points)
   /// Points and triangles above this height [m] (map frame, floor at 0) are not shown: the ceiling would
   /// hide the room from rviz's view from above. Display only; meshes and files keep everything.
   double display_max_z_m = 2.0;
-  double map_poll_s = 2.0;             ///< period [s] of checking map_dir and load_mesh for changes
+  double map_poll_s = 2.0;  ///< period [s] of checking map_dir and load_mesh for changes
   /// How build_mesh meshes the map (an empty input_path): "bpa" (Ball Pivoting of the map's points),
   /// "marching_cubes" (of the fused TSDF map, fused_map.h) or "fused_bpa" (Ball Pivoting of the fused
   /// map's surface points). A cloud file (input_path) is always meshed by Ball Pivoting.
   std::string mesh_method = "bpa";
-  double fused_voxel_m = 0.02;         ///< voxel of the fused map [m], [0.005, 0.5]
-  double fused_carve_m = 0.2;          ///< free space carved before each hit along its beam [m], [0, 1000]
+  double fused_voxel_m = 0.02;  ///< voxel of the fused map [m], [0.005, 0.5]
+  double fused_carve_m = 0.2;   ///< free space carved before each hit along its beam [m], [0, 1000]
   void validate() const;
   /// output_dir, or the directory it defaults to ("" when there is none).
   std::string allowedOutputDir() const;

@@ -65,11 +65,11 @@ struct FusedMapConfig {
 
 /// Counts and times of an integration (cumulative over the map's life).
 struct FusedMapStats {
-  size_t scans = 0;            ///< integrate() calls
-  size_t points = 0;           ///< finite readings integrated
-  size_t skipped_points = 0;   ///< readings skipped: not finite (the scanner's invalid readings), or at the origin
-  size_t voxel_updates = 0;    ///< voxel updates (band and free space)
-  size_t leaves_created = 0;   ///< leaf nodes (8^3 voxels) allocated in each grid (bounded by max_grid_mb)
+  size_t scans = 0;           ///< integrate() calls
+  size_t points = 0;          ///< finite readings integrated
+  size_t skipped_points = 0;  ///< readings skipped: not finite (the scanner's invalid readings), or at the origin
+  size_t voxel_updates = 0;   ///< voxel updates (band and free space)
+  size_t leaves_created = 0;  ///< leaf nodes (8^3 voxels) allocated in each grid (bounded by max_grid_mb)
   double integrate_seconds = 0.0;
 };
 
@@ -139,10 +139,10 @@ size_t integrateMapDirectory(FusedMap& map, const std::string& dir, std::vector<
 /// A mesh of a map directory made through its fused map (bpa_mesher_node's `mesh_method`).
 struct FusedMesh {
   TriangleMesh mesh;
-  size_t scans = 0;            ///< scans integrated
-  size_t surface_points = 0;   ///< fused surface points meshed ("fused_bpa")
-  size_t voxels = 0;           ///< active voxels of the fused map
-  size_t memory_bytes = 0;     ///< of its grids
+  size_t scans = 0;           ///< scans integrated
+  size_t surface_points = 0;  ///< fused surface points meshed ("fused_bpa")
+  size_t voxels = 0;          ///< active voxels of the fused map
+  size_t memory_bytes = 0;    ///< of its grids
   double integrate_s = 0.0, mesh_s = 0.0;
 };
 /// The methods meshFusedMapDirectory takes: "marching_cubes" (FusedMap::extractMesh) and

@@ -13,16 +13,16 @@ namespace mesher {
 
 /// Counts describing a mesh's topology. Vertices without a face are not counted.
 struct MeshTopology {
-  size_t vertices = 0;               ///< vertices used by at least one face
-  size_t edges = 0;                  ///< undirected edges
+  size_t vertices = 0;  ///< vertices used by at least one face
+  size_t edges = 0;     ///< undirected edges
   size_t faces = 0;
-  size_t degenerate_faces = 0;       ///< faces with a repeated vertex index
-  size_t boundary_edges = 0;         ///< edges with one face
-  size_t nonmanifold_edges = 0;      ///< edges with more than two faces
-  size_t inconsistent_edges = 0;     ///< edges with two faces that run the edge in the same direction
-  size_t nonmanifold_vertices = 0;   ///< vertices whose faces form more than one fan (edge-connected group)
-  size_t components = 0;             ///< edge-connected groups of faces
-  size_t boundary_loops = 0;         ///< closed chains of boundary edges (when the mesh is manifold)
+  size_t degenerate_faces = 0;      ///< faces with a repeated vertex index
+  size_t boundary_edges = 0;        ///< edges with one face
+  size_t nonmanifold_edges = 0;     ///< edges with more than two faces
+  size_t inconsistent_edges = 0;    ///< edges with two faces that run the edge in the same direction
+  size_t nonmanifold_vertices = 0;  ///< vertices whose faces form more than one fan (edge-connected group)
+  size_t components = 0;            ///< edge-connected groups of faces
+  size_t boundary_loops = 0;        ///< closed chains of boundary edges (when the mesh is manifold)
   long euler() const { return static_cast<long>(vertices) - static_cast<long>(edges) + static_cast<long>(faces); }
   bool manifold() const { return nonmanifold_edges == 0 && nonmanifold_vertices == 0 && inconsistent_edges == 0; }
 };

@@ -72,11 +72,12 @@ size_t estimateNormals(ScanPoints& pts, double radius_m, int min_neighbors, bool
 
 /// Pipeline settings.
 struct MesherConfig {
-  std::vector<double> radii_m;       ///< increasing ball radii [m], each in (0, 10], at most 32; empty = automaticRadii(spacing)
-  double voxel_m = 0.0;              ///< voxel edge for downsampling [m], [0, 10]; 0 = none
-  double normal_radius_m = 0.0;      ///< neighbourhood for normal estimation [m]; 0 = 3 x spacing
-  int normal_min_neighbors = 5;      ///< neighbours a normal needs
-  bool smooth = true;                ///< move points onto their local plane when estimating normals
+  std::vector<double>
+      radii_m;           ///< increasing ball radii [m], each in (0, 10], at most 32; empty = automaticRadii(spacing)
+  double voxel_m = 0.0;  ///< voxel edge for downsampling [m], [0, 10]; 0 = none
+  double normal_radius_m = 0.0;  ///< neighbourhood for normal estimation [m]; 0 = 3 x spacing
+  int normal_min_neighbors = 5;  ///< neighbours a normal needs
+  bool smooth = true;            ///< move points onto their local plane when estimating normals
   /// Checks the values; throws ConfigError naming the field.
   void validate() const;
 };
@@ -86,13 +87,13 @@ struct MesherResult {
   TriangleMesh mesh;
   BpaStats stats;
   MeshTopology topology;
-  size_t input_points = 0;   ///< points given
-  size_t points = 0;         ///< points that entered the reconstruction (after voxels, with a normal)
-  double spacing_m = 0.0;    ///< mean point spacing after downsampling
+  size_t input_points = 0;  ///< points given
+  size_t points = 0;        ///< points that entered the reconstruction (after voxels, with a normal)
+  double spacing_m = 0.0;   ///< mean point spacing after downsampling
   std::vector<double> radii_m;
-  double seconds = 0.0;      ///< wall time of the whole pipeline
+  double seconds = 0.0;          ///< wall time of the whole pipeline
   double prepare_seconds = 0.0;  ///< wall time of voxels, spacing and normals
-  double bpa_seconds = 0.0;  ///< wall time of the Ball Pivoting passes
+  double bpa_seconds = 0.0;      ///< wall time of the Ball Pivoting passes
 };
 
 /// Runs the pipeline. Throws ConfigError for bad settings, std::runtime_error when there is nothing

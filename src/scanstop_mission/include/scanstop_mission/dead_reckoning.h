@@ -15,9 +15,9 @@ namespace mission {
 
 /// The error bounds of the odometry (defaults: the thesis' motion profile with a margin).
 struct DeadReckoningModel {
-  double turn_error = 0.03;      ///< heading error per radian turned [rad/rad] (thesis: 2 % + 1 %)
+  double turn_error = 0.03;        ///< heading error per radian turned [rad/rad] (thesis: 2 % + 1 %)
   double drift_rad_per_m = 0.015;  ///< heading drift per metre driven [rad/m] (thesis: curvature 0.01 + 0.005 1/m)
-  double distance_error = 0.04;  ///< position error per metre driven [m/m] (thesis: scale 3 % + 1 %)
+  double distance_error = 0.04;    ///< position error per metre driven [m/m] (thesis: scale 3 % + 1 %)
   /// position error per radian turned [m/rad]: a rotation on the spot does not stay on the spot
   /// (the thesis' simulator: a Gaussian of 0.01 m/rad per axis; this is its 3 sigma)
   double turn_position_m_per_rad = 0.03;
@@ -46,7 +46,7 @@ class DeadReckoning {
   /// estimated heading) to hold the true disc there [m].
   double widenedRadius(double radius_m, double ahead_m) const;
 
-  double drivenM() const { return driven_m_; }    ///< driven since the reset [m]
+  double drivenM() const { return driven_m_; }      ///< driven since the reset [m]
   double turnedRad() const { return turned_rad_; }  ///< |turns| summed since the reset [rad]
   const DeadReckoningModel& model() const { return model_; }
 

@@ -57,8 +57,8 @@ class MissionNode {
   ros::NodeHandle nh_;
   MissionConfig config_;
   bool shutdown_when_done_ = false;
-  bool html_report_ = true;        ///< run make_report.py after report.md
-  std::string report_script_;      ///< its path (default: beside this executable)
+  bool html_report_ = true;    ///< run make_report.py after report.md
+  std::string report_script_;  ///< its path (default: beside this executable)
   double master_timeout_s_ = 30.0;
   std::atomic<bool> paused_for_master_{false};  ///< the watchdog paused the mission (it resumes it)
   std::unique_ptr<RosRobotSystem> robot_;
@@ -76,7 +76,7 @@ class MissionNode {
   /// The explorer's configuration of this run (explorer_node writes it into its run_dir): the true
   /// coverage rebuilds the floor map with it.
   std::string explorer_config_;
-  int surface_planes_ = 100;         ///< planes of the visible surface's candidate scans; 0: no surface coverage
+  int surface_planes_ = 100;  ///< planes of the visible surface's candidate scans; 0: no surface coverage
   ros::Subscriber static_tf_sub_;
   std::mutex start_mutex_;
   std::optional<Pose2D> world_T_map_;

@@ -15,14 +15,14 @@ struct Summary {
   std::string world;
   std::string state;
   int scans = 0;
-  double coverage = 0.0;               ///< observed share of the reachable floor [0..1]
+  double coverage = 0.0;  ///< observed share of the reachable floor [0..1]
   int collisions = 0;
   bool complete = false;
   std::string complete_reason;
   bool has_ground_truth = false;
-  double slam_error_m = 0.0;           ///< final SLAM position error against ground truth [m]
+  double slam_error_m = 0.0;  ///< final SLAM position error against ground truth [m]
   double slam_error_yaw_deg = 0.0;
-  double odom_error_m = 0.0;           ///< final odometry-only position error against ground truth [m]
+  double odom_error_m = 0.0;  ///< final odometry-only position error against ground truth [m]
   double odom_error_yaw_deg = 0.0;
   /// Absolute trajectory error (simulation): the position error of every scan with a true pose,
   /// at SLAM's poses as finally optimized (ScanRecord::map_pose), RMS and max; the same for the
@@ -30,7 +30,7 @@ struct Summary {
   int ate_scans = 0;
   double ate_rms_m = 0.0;
   double ate_max_m = 0.0;
-  int ate_max_scan = -1;               ///< SLAM index of the scan with the largest error
+  int ate_max_scan = -1;  ///< SLAM index of the scan with the largest error
   double ate_yaw_rms_deg = 0.0;
   double ate_yaw_max_deg = 0.0;
   double odom_ate_rms_m = 0.0;
@@ -43,24 +43,24 @@ struct Summary {
   int close_legs = 0;
   double compute_per_cycle_mean_s = 0.0;  ///< register + plan wall time per cycle [s]
   double compute_per_cycle_max_s = 0.0;
-  double scan_time_mean_s = 0.0;       ///< modelled scan duration [s]
-  double elapsed_s = 0.0;              ///< wall time of the mission [s]
-  double modelled_time_s = 0.0;        ///< time the steps would take on the robot [s]
-  double modelled_scan_s = 0.0;        ///< ... of it scanning [s]
-  double modelled_drive_s = 0.0;       ///< ... driving [s]
-  double modelled_compute_s = 0.0;     ///< ... registering and planning [s]
+  double scan_time_mean_s = 0.0;    ///< modelled scan duration [s]
+  double elapsed_s = 0.0;           ///< wall time of the mission [s]
+  double modelled_time_s = 0.0;     ///< time the steps would take on the robot [s]
+  double modelled_scan_s = 0.0;     ///< ... of it scanning [s]
+  double modelled_drive_s = 0.0;    ///< ... driving [s]
+  double modelled_compute_s = 0.0;  ///< ... registering and planning [s]
   int unconverged_registrations = 0;
   /// In simulation: the share of the world's truly reachable floor (from the world mesh) that the
   /// map observed. `coverage` is the explorer's own figure, counted on the floor it can reach in its
   /// map: a door it never passed hides what lies behind it there, not here.
   bool has_true_coverage = false;
-  double true_coverage = 0.0;          ///< [0..1]
-  double true_reachable_m2 = 0.0;      ///< the truly reachable floor [m^2]
+  double true_coverage = 0.0;      ///< [0..1]
+  double true_reachable_m2 = 0.0;  ///< the truly reachable floor [m^2]
   /// In simulation: the share of the world's surface visible from the truly reachable floor
   /// (eval::visibleSurface) that the map holds within 3 cm (eval::mapSurfaceCoverage).
   bool has_surface_coverage = false;
-  double surface_coverage = 0.0;       ///< [0..1]
-  size_t surface_visible = 0;          ///< visible surface elements (5 cm)
+  double surface_coverage = 0.0;  ///< [0..1]
+  size_t surface_visible = 0;     ///< visible surface elements (5 cm)
 };
 
 /// Ground-truth coverage of a simulated run (eval::groundTruthCoverageOfRun on the final map).

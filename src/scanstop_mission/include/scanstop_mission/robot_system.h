@@ -18,8 +18,8 @@ namespace mission {
 struct StepResult {
   bool success = false;
   std::string message;
-  double duration_s = 0.0;    ///< as reported by the serving node (modelled time in simulation) [s]
-  double wall_time_s = 0.0;   ///< wall-clock time the call took, measured by the caller [s]
+  double duration_s = 0.0;   ///< as reported by the serving node (modelled time in simulation) [s]
+  double wall_time_s = 0.0;  ///< wall-clock time the call took, measured by the caller [s]
 };
 
 /// Where the robot touched something the map did not show (map frame): an obstacle disc for every
@@ -33,11 +33,11 @@ struct Contact {
 
 /// A 3D scan taken while the robot stands still.
 struct ScanResult : StepResult {
-  Pose2D odom_pose;           ///< odometry pose of base_link at scan time (odom frame)
+  Pose2D odom_pose;  ///< odometry pose of base_link at scan time (odom frame)
   uint32_t raw_points = 0;
   uint32_t valid_points = 0;
   uint32_t planes_dropped = 0;
-  std::any payload;           ///< the cloud as the implementation keeps it (handed back to registerScan)
+  std::any payload;  ///< the cloud as the implementation keeps it (handed back to registerScan)
   /// The scan's finite points in base_link [m] (for the safety check of the legs driven before the
   /// next scan); may be empty (no check).
   std::vector<Eigen::Vector3f> points_base;
@@ -45,9 +45,9 @@ struct ScanResult : StepResult {
 
 /// A relative motion, as measured by odometry.
 struct MotionResult : StepResult {
-  double achieved = 0.0;      ///< [rad] for a rotation, [m] for a forward motion
-  Pose2D odom_pose;           ///< final odometry pose of base_link
-  bool collision = false;     ///< stopped by a collision or stall
+  double achieved = 0.0;   ///< [rad] for a rotation, [m] for a forward motion
+  Pose2D odom_pose;        ///< final odometry pose of base_link
+  bool collision = false;  ///< stopped by a collision or stall
   /// Simulation only: the true smallest distance between the body and the world along the motion
   /// (sim_node's ground_truth/clearance) [m]; nullopt on a real robot.
   std::optional<double> true_clearance_m;
@@ -55,7 +55,7 @@ struct MotionResult : StepResult {
 
 /// A scan registered into the map.
 struct RegisterResult : StepResult {
-  Pose2D map_pose;            ///< corrected pose of base_link in the map frame
+  Pose2D map_pose;  ///< corrected pose of base_link in the map frame
   bool converged = false;
   uint32_t iterations = 0;
   uint32_t correspondences = 0;
@@ -71,10 +71,10 @@ struct PlanResult : StepResult {
   std::vector<double> clearance_m;
   Eigen::Vector2d target = Eigen::Vector2d::Zero();
   double score = 0.0;
-  bool complete = false;                   ///< exploration is complete
+  bool complete = false;  ///< exploration is complete
   std::string complete_reason;
-  double coverage = 0.0;                   ///< observed share of the reachable floor [0..1]
-  double d_max_m = 0.0;                    ///< the explorer's d_max: the longest straight motion [m]; 0: not said
+  double coverage = 0.0;  ///< observed share of the reachable floor [0..1]
+  double d_max_m = 0.0;   ///< the explorer's d_max: the longest straight motion [m]; 0: not said
 };
 
 /// A reconstructed surface mesh.
@@ -96,8 +96,7 @@ class RobotSystem {
   /// to the goal instead (PlanResult::complete still says whether exploration is complete).
   /// `contacts`: where the robot touched something (map frame): obstacles the plan must not pass.
   virtual PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
-                              const std::vector<Contact>& contacts,
-                              const std::optional<Eigen::Vector2d>& goal) = 0;
+                              const std::vector<Contact>& contacts, const std::optional<Eigen::Vector2d>& goal) = 0;
   virtual MeshResult buildMesh(const std::string& output_path) = 0;
   /// The true pose in the map frame (simulation only), for the report; nullopt on a real robot.
   virtual std::optional<Pose2D> groundTruth() = 0;

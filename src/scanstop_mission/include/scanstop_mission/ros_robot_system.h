@@ -38,8 +38,7 @@ class RosRobotSystem : public RobotSystem {
   MotionResult rotate(double angle_rad) override;
   MotionResult forward(double distance_m) override;
   PlanResult planNext(const Pose2D& map_pose, const std::vector<Eigen::Vector2d>& unreachable,
-                      const std::vector<Contact>& contacts,
-                      const std::optional<Eigen::Vector2d>& goal) override;
+                      const std::vector<Contact>& contacts, const std::optional<Eigen::Vector2d>& goal) override;
   MeshResult buildMesh(const std::string& output_path) override;
   std::optional<Pose2D> groundTruth() override;
   int registeredScanCount() override;

@@ -13,23 +13,23 @@ namespace scanstop {
 namespace pioneer {
 
 struct MotionConfig {
-  double linear_speed_mps = 0.2;         ///< [m/s] cruise speed of forward motions
-  double angular_speed_radps = 0.35;     ///< [rad/s] cruise turn rate of rotations (20 deg/s)
-  double min_linear_speed_mps = 0.03;    ///< [m/s] slowest speed of the final approach
-  double min_angular_speed_radps = 0.07; ///< [rad/s] slowest turn rate of the final approach (4 deg/s)
-  double linear_decel_mps2 = 0.25;       ///< [m/s^2] slow-down profile near the target: v = sqrt(2 a d)
-  double angular_decel_radps2 = 0.6;     ///< [rad/s^2] slow-down profile near the target angle
-  double approach_distance_m = 0.02;     ///< [m] the last stretch is driven at min_linear_speed
-  double approach_angle_rad = 0.035;     ///< [rad] the last part of a turn is at min_angular_speed
-  double distance_tolerance_m = 0.005;   ///< [m] stop when this close to the distance
-  double angle_tolerance_rad = 0.005;    ///< [rad] stop when this close to the angle
-  double timeout_factor = 2.0;           ///< timeout = factor * nominal duration + timeout_extra_s
-  double timeout_extra_s = 5.0;          ///< [s]
-  double stall_time_s = 0.3;             ///< [s] a wheel stall flag lasting this long aborts
-  double motors_disabled_time_s = 1.0;   ///< [s] motors reported disabled this long aborts
-  double settle_timeout_s = 2.0;         ///< [s] after the stop command, wait at most this for standstill
-  double max_forward_m = 5.0;            ///< [m] longest distance accepted
-  double max_rotate_rad = 6.2832;        ///< [rad] largest angle accepted (2 pi)
+  double linear_speed_mps = 0.2;          ///< [m/s] cruise speed of forward motions
+  double angular_speed_radps = 0.35;      ///< [rad/s] cruise turn rate of rotations (20 deg/s)
+  double min_linear_speed_mps = 0.03;     ///< [m/s] slowest speed of the final approach
+  double min_angular_speed_radps = 0.07;  ///< [rad/s] slowest turn rate of the final approach (4 deg/s)
+  double linear_decel_mps2 = 0.25;        ///< [m/s^2] slow-down profile near the target: v = sqrt(2 a d)
+  double angular_decel_radps2 = 0.6;      ///< [rad/s^2] slow-down profile near the target angle
+  double approach_distance_m = 0.02;      ///< [m] the last stretch is driven at min_linear_speed
+  double approach_angle_rad = 0.035;      ///< [rad] the last part of a turn is at min_angular_speed
+  double distance_tolerance_m = 0.005;    ///< [m] stop when this close to the distance
+  double angle_tolerance_rad = 0.005;     ///< [rad] stop when this close to the angle
+  double timeout_factor = 2.0;            ///< timeout = factor * nominal duration + timeout_extra_s
+  double timeout_extra_s = 5.0;           ///< [s]
+  double stall_time_s = 0.3;              ///< [s] a wheel stall flag lasting this long aborts
+  double motors_disabled_time_s = 1.0;    ///< [s] motors reported disabled this long aborts
+  double settle_timeout_s = 2.0;          ///< [s] after the stop command, wait at most this for standstill
+  double max_forward_m = 5.0;             ///< [m] longest distance accepted
+  double max_rotate_rad = 6.2832;         ///< [rad] largest angle accepted (2 pi)
 
   /// Throws ConfigError naming the field (prefixed by `prefix`) that is out of range.
   void validate(const std::string& prefix = "motion/") const;
@@ -37,11 +37,11 @@ struct MotionConfig {
 
 /// What the robot reported at one SIP.
 struct MotionSample {
-  double t_s = 0.0;          ///< [s] monotonic time
-  Pose2D pose;               ///< odometry pose of base_link in odom [m, rad]
-  bool moving = false;       ///< SIP type 0x33
-  double v_mps = 0.0;        ///< forward speed from the wheel velocities
-  double w_radps = 0.0;      ///< turn rate from the wheel velocities
+  double t_s = 0.0;      ///< [s] monotonic time
+  Pose2D pose;           ///< odometry pose of base_link in odom [m, rad]
+  bool moving = false;   ///< SIP type 0x33
+  double v_mps = 0.0;    ///< forward speed from the wheel velocities
+  double w_radps = 0.0;  ///< turn rate from the wheel velocities
   bool left_stall = false, right_stall = false;
   uint8_t front_bumpers = 0, rear_bumpers = 0;
   bool motors_enabled = true;

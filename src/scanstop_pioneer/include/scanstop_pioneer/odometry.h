@@ -13,13 +13,13 @@ namespace pioneer {
 
 /// Conversion factors of one robot subclass (PROTOCOL_FACTS 2.7); defaults: Pioneer 2 DX (p2dx).
 struct RobotParams {
-  std::string subclass = "p2dx";        ///< expected subclass from the SYNC2 reply
-  double angle_conv_rad = 0.001534;     ///< [rad / angle unit] (2 pi / 4096)
-  double dist_conv_mm = 0.84;           ///< [mm / position unit]
-  double vel_conv = 1.0;                ///< [mm/s per velocity unit]
-  double range_conv_mm = 0.268;         ///< [mm / sonar unit]
-  double diff_conv = 0.0056;            ///< [1/mm]: w [rad/s] = (right - left) [mm/s] * diff_conv / 2
-  double max_velocity_mps = 2.2;        ///< [m/s] MaxVelocity
+  std::string subclass = "p2dx";           ///< expected subclass from the SYNC2 reply
+  double angle_conv_rad = 0.001534;        ///< [rad / angle unit] (2 pi / 4096)
+  double dist_conv_mm = 0.84;              ///< [mm / position unit]
+  double vel_conv = 1.0;                   ///< [mm/s per velocity unit]
+  double range_conv_mm = 0.268;            ///< [mm / sonar unit]
+  double diff_conv = 0.0056;               ///< [1/mm]: w [rad/s] = (right - left) [mm/s] * diff_conv / 2
+  double max_velocity_mps = 2.2;           ///< [m/s] MaxVelocity
   double max_rot_velocity_radps = 8.7266;  ///< [rad/s] MaxRVelocity (500 deg/s)
 
   /// Throws ConfigError naming the field (prefixed by `prefix`) that is out of range.
@@ -53,7 +53,7 @@ class OdometryIntegrator {
   bool have_last_ = false;
   uint16_t last_x_ = 0, last_y_ = 0;
   double raw_x_m_ = 0.0, raw_y_m_ = 0.0;  ///< unwrapped robot-internal position [m]
-  Pose2D T_odom_raw_;                      ///< robot-internal frame in the odom frame
+  Pose2D T_odom_raw_;                     ///< robot-internal frame in the odom frame
   Pose2D pose_;
   double v_mps_ = 0.0, w_radps_ = 0.0;
 };

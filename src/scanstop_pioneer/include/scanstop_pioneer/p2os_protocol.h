@@ -26,8 +26,8 @@ constexpr size_t kMaxPayload = kMaxCount - 2;
 namespace cmd {
 constexpr uint8_t kSync0 = 0, kSync1 = 1, kSync2 = 2;
 constexpr uint8_t kPulse = 0, kOpen = 1, kClose = 2, kEnable = 4, kSetA = 5, kSetV = 6, kSetO = 7, kMove = 8,
-                  kRotate = 9, kSetRV = 10, kVel = 11, kHead = 12, kDHead = 13, kRVel = 21, kSetRA = 23,
-                  kSonar = 28, kStop = 29, kEStop = 55;
+                  kRotate = 9, kSetRV = 10, kVel = 11, kHead = 12, kDHead = 13, kRVel = 21, kSetRA = 23, kSonar = 28,
+                  kStop = 29, kEStop = 55;
 }  // namespace cmd
 
 /// Argument type bytes.
@@ -60,8 +60,8 @@ std::vector<uint8_t> commandPacket(uint8_t command, const std::string& value);
 struct ClientCommand {
   uint8_t number = 0;
   enum class Arg { kNone, kInt, kString } arg = Arg::kNone;
-  int value = 0;      ///< for kInt, signed
-  std::string text;   ///< for kString
+  int value = 0;     ///< for kInt, signed
+  std::string text;  ///< for kString
 };
 /// Decodes a client command payload; returns false with a reason for a malformed argument.
 bool decodeCommand(const uint8_t* payload, size_t n, ClientCommand& out, std::string* error = nullptr);
@@ -97,19 +97,19 @@ class PacketParser {
 /// The standard SIP (PROTOCOL_FACTS 2.5), raw values as sent by the robot.
 struct Sip {
   uint8_t type = kSipStopped;
-  uint16_t x = 0;              ///< XPOS, low 15 bits [robot units]
-  uint16_t y = 0;              ///< YPOS, low 15 bits [robot units]
-  int16_t th = 0;              ///< THPOS [angle units]
-  int16_t left_vel = 0;        ///< [mm/s / VelConvFactor]
-  int16_t right_vel = 0;       ///< [mm/s / VelConvFactor]
-  uint8_t battery = 0;         ///< [0.1 V]
-  uint8_t stall_bump_lo = 0;   ///< bit 0 left wheel stall, bits 1..5 rear bumpers
-  uint8_t stall_bump_hi = 0;   ///< bit 0 right wheel stall, bits 1..5 front bumpers
-  int16_t control = 0;         ///< heading setpoint [angle units]
-  uint16_t flags = 0;          ///< bit 0 motors enabled
-  uint8_t compass = 0;         ///< [2 deg]
+  uint16_t x = 0;                                   ///< XPOS, low 15 bits [robot units]
+  uint16_t y = 0;                                   ///< YPOS, low 15 bits [robot units]
+  int16_t th = 0;                                   ///< THPOS [angle units]
+  int16_t left_vel = 0;                             ///< [mm/s / VelConvFactor]
+  int16_t right_vel = 0;                            ///< [mm/s / VelConvFactor]
+  uint8_t battery = 0;                              ///< [0.1 V]
+  uint8_t stall_bump_lo = 0;                        ///< bit 0 left wheel stall, bits 1..5 rear bumpers
+  uint8_t stall_bump_hi = 0;                        ///< bit 0 right wheel stall, bits 1..5 front bumpers
+  int16_t control = 0;                              ///< heading setpoint [angle units]
+  uint16_t flags = 0;                               ///< bit 0 motors enabled
+  uint8_t compass = 0;                              ///< [2 deg]
   std::vector<std::pair<uint8_t, uint16_t>> sonar;  ///< (number, range [RangeConvFactor units])
-  bool has_io = false;         ///< the gripper/analog/digital bytes were present
+  bool has_io = false;                              ///< the gripper/analog/digital bytes were present
   uint16_t gripper = 0;
   uint8_t analog = 0, digin = 0, digout = 0;
 

@@ -22,17 +22,17 @@ namespace scanstop {
 namespace pioneer {
 
 struct DriverConfig {
-  std::string port;                       ///< serial device (or the emulator's pty link)
-  int baud = 9600;                        ///< P2OS starts at 9600
+  std::string port;  ///< serial device (or the emulator's pty link)
+  int baud = 9600;   ///< P2OS starts at 9600
   RobotParams robot;
   ClientConfig client;
   MotionConfig motion;
-  double sip_timeout_s = 1.0;             ///< [s] no valid SIP this long: link lost, reconnect
-  double reconnect_period_s = 1.0;        ///< [s] pause between connection attempts
-  double pulse_period_s = 0.5;            ///< [s] send PULSE / re-send setpoints at least this often
-  double cmd_vel_timeout_s = 0.5;         ///< [s] teleoperation stops when no command came this long
-  double max_linear_speed_mps = 0.5;      ///< [m/s] teleoperation clamp
-  double max_angular_speed_radps = 1.0;   ///< [rad/s] teleoperation clamp
+  double sip_timeout_s = 1.0;            ///< [s] no valid SIP this long: link lost, reconnect
+  double reconnect_period_s = 1.0;       ///< [s] pause between connection attempts
+  double pulse_period_s = 0.5;           ///< [s] send PULSE / re-send setpoints at least this often
+  double cmd_vel_timeout_s = 0.5;        ///< [s] teleoperation stops when no command came this long
+  double max_linear_speed_mps = 0.5;     ///< [m/s] teleoperation clamp
+  double max_angular_speed_radps = 1.0;  ///< [rad/s] teleoperation clamp
 
   /// Throws ConfigError naming the parameter that is wrong.
   void validate() const;
@@ -44,13 +44,13 @@ enum class LinkState { kDisconnected, kConnected };
 struct DriverStatus {
   LinkState link = LinkState::kDisconnected;
   std::string port;
-  SyncInfo robot;                 ///< identification from the last SYNC2 reply
-  std::string last_error;         ///< why the link was last lost or could not be opened
-  std::string connect_note;       ///< what the last handshake had to do (recovery)
-  bool have_sip = false;          ///< a SIP arrived since the last connect
-  Sip sip;                        ///< the last accepted SIP
-  double sip_time_s = 0.0;        ///< [s] monotonic time of that SIP
-  Pose2D odom;                    ///< base_link in odom [m, rad]
+  SyncInfo robot;            ///< identification from the last SYNC2 reply
+  std::string last_error;    ///< why the link was last lost or could not be opened
+  std::string connect_note;  ///< what the last handshake had to do (recovery)
+  bool have_sip = false;     ///< a SIP arrived since the last connect
+  Sip sip;                   ///< the last accepted SIP
+  double sip_time_s = 0.0;   ///< [s] monotonic time of that SIP
+  Pose2D odom;               ///< base_link in odom [m, rad]
   double v_mps = 0.0, w_radps = 0.0;
   bool motion_active = false;
   bool teleop_active = false;
@@ -65,9 +65,9 @@ struct MotionResult {
   bool collision = false;
   MotionOutcome outcome = MotionOutcome::kAborted;
   std::string message;
-  double achieved = 0.0;    ///< [rad] or [m] measured by odometry
+  double achieved = 0.0;  ///< [rad] or [m] measured by odometry
   double duration_s = 0.0;
-  Pose2D odom;              ///< final odometry pose
+  Pose2D odom;  ///< final odometry pose
 };
 
 /// Monotonic seconds (steady clock).

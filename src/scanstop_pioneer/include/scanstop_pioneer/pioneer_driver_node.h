@@ -56,9 +56,9 @@ class PioneerDriverNode {
   tf2_ros::TransformBroadcaster tf_;
   diagnostic_updater::Updater updater_;
   ros::WallTimer timer_;
-  uint64_t rate_sips_ = 0;       ///< SIP count at the last timer tick
-  ros::WallTime rate_time_;      ///< time of the last timer tick
-  double sip_rate_hz_ = 0.0;     ///< accepted SIPs per second over the last tick
+  uint64_t rate_sips_ = 0;    ///< SIP count at the last timer tick
+  ros::WallTime rate_time_;   ///< time of the last timer tick
+  double sip_rate_hz_ = 0.0;  ///< accepted SIPs per second over the last tick
 };
 
 }  // namespace pioneer

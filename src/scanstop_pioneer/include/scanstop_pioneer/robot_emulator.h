@@ -18,16 +18,16 @@ namespace scanstop {
 namespace pioneer {
 
 struct EmulatorConfig {
-  RobotParams robot;                                   ///< conversion factors used to encode SIPs
+  RobotParams robot;  ///< conversion factors used to encode SIPs
   SyncInfo identity{"scanstop-emulator", "Pioneer", "p2dx"};
-  double sip_period_s = 0.1;                           ///< [s] standard SIP cycle
-  double watchdog_s = 2.0;                             ///< [s] drives stop without client packets
-  double trans_accel_mps2 = 0.3;                       ///< [m/s^2] SETA default
-  double rot_accel_radps2 = 1.745;                     ///< [rad/s^2] SETRA default (100 deg/s^2)
-  double battery_v = 12.5;                             ///< [V]
-  uint32_t seed = 1;                                   ///< fault randomness
-  double start_x_mm = 0.0;                             ///< [mm] odometry counters at OPEN (e.g. near the
-  double start_y_mm = 0.0;                             ///<      15-bit wrap, 0x7FFF units = 27.5 m)
+  double sip_period_s = 0.1;        ///< [s] standard SIP cycle
+  double watchdog_s = 2.0;          ///< [s] drives stop without client packets
+  double trans_accel_mps2 = 0.3;    ///< [m/s^2] SETA default
+  double rot_accel_radps2 = 1.745;  ///< [rad/s^2] SETRA default (100 deg/s^2)
+  double battery_v = 12.5;          ///< [V]
+  uint32_t seed = 1;                ///< fault randomness
+  double start_x_mm = 0.0;          ///< [mm] odometry counters at OPEN (e.g. near the
+  double start_y_mm = 0.0;          ///<      15-bit wrap, 0x7FFF units = 27.5 m)
 };
 
 enum class EmulatorState { kWait, kGot0, kGot1, kConnected, kOpen };
@@ -35,15 +35,15 @@ const char* toString(EmulatorState state);
 
 /// Faults the emulator can inject (set through RobotEmulator::faults() or command()).
 struct EmulatorFaults {
-  int corrupt_checksum = 0;   ///< the next N packets carry a wrong checksum
-  int drop_bytes = 0;         ///< the next N packets lose one byte
-  int garbage_bytes = 0;      ///< random bytes sent before the next packet
-  double silent_until = -1;   ///< [s] no output at all before this time (input still heard)
-  bool stall = false;         ///< the wheels are blocked: no motion, stall flags while driven
-  bool encoder = false;       ///< encoders frozen: the robot moves, odometry does not change
+  int corrupt_checksum = 0;      ///< the next N packets carry a wrong checksum
+  int drop_bytes = 0;            ///< the next N packets lose one byte
+  int garbage_bytes = 0;         ///< random bytes sent before the next packet
+  double silent_until = -1;      ///< [s] no output at all before this time (input still heard)
+  bool stall = false;            ///< the wheels are blocked: no motion, stall flags while driven
+  bool encoder = false;          ///< encoders frozen: the robot moves, odometry does not change
   bool motor_power_off = false;  ///< motor power switched off: motors disabled, ENABLE has no effect
-  uint8_t front_bumpers = 0;  ///< bumper bits 1..5 reported (front)
-  uint8_t rear_bumpers = 0;   ///< (rear)
+  uint8_t front_bumpers = 0;     ///< bumper bits 1..5 reported (front)
+  uint8_t rear_bumpers = 0;      ///< (rear)
 };
 
 class RobotEmulator {
@@ -95,7 +95,7 @@ class RobotEmulator {
   bool watchdog_tripped_ = false;
   double set_v_mps_ = 0.0, set_w_radps_ = 0.0;  ///< setpoints from VEL / RVEL
   double trans_accel_ = 0.0, rot_accel_ = 0.0;
-  double v_mps_ = 0.0, w_radps_ = 0.0;          ///< actual
+  double v_mps_ = 0.0, w_radps_ = 0.0;  ///< actual
   Pose2D true_pose_;
   double odo_x_mm_ = 0.0, odo_y_mm_ = 0.0, odo_th_rad_ = 0.0;  ///< what the encoders count
   uint64_t packets_received_ = 0, sips_sent_ = 0, sessions_opened_ = 0;

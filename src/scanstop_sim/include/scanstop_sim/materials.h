@@ -41,18 +41,18 @@ enum class Material : uint8_t {
 const char* materialName(Material m);
 
 struct MaterialRegion {
-  std::string name;                    ///< from the file, or "entry <k>"
+  std::string name;  ///< from the file, or "entry <k>"
   Material material = Material::Diffuse;
   Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();  ///< [m], world frame
-  double bias_m = 0.10;                ///< retroreflective: the reading is this much short [m]
-  double reflect_probability = 0.0;    ///< glass: probability that the pane returns the beam
+  double bias_m = 0.10;              ///< retroreflective: the reading is this much short [m]
+  double reflect_probability = 0.0;  ///< glass: probability that the pane returns the beam
   bool contains(const Eigen::Vector3d& p) const {
     return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
   }
 };
 
 struct MaterialMap {
-  std::string source;                  ///< the file it was read from (for messages)
+  std::string source;  ///< the file it was read from (for messages)
   std::vector<MaterialRegion> regions;
 };
 

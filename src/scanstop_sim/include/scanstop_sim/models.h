@@ -19,23 +19,24 @@ namespace sim {
 /// down into the robot (no points below the robot). Plane k of N is turned by k * 180 deg / N
 /// about z from the robot's x axis; half a turn covers the whole sphere but the cone below.
 struct ScannerConfig {
-  double height_m = 0.45;          ///< scanner centre above the floor (base_link z)
-  double x_offset_m = 0.0;         ///< scanner centre ahead of the robot centre (base_link x)
-  double mount_offset_m = 0.0;     ///< laser optical centre off the rotation axis, along the plane [m]
-  int first_step = 44;             ///< URG-04LX AMIN
-  int last_step = 725;             ///< URG-04LX AMAX (682 beams)
-  int front_step = 384;            ///< AFRT: the step along the plane's "up" axis
-  int steps_per_turn = 1024;       ///< ARES
-  double min_range_m = 0.02;       ///< DMIN
-  double max_range_m = 5.6;        ///< DMAX
-  double plane_time_s = 0.1;       ///< time per plane (66.7 ms scan + 33.3 ms return)
+  double height_m = 0.45;       ///< scanner centre above the floor (base_link z)
+  double x_offset_m = 0.0;      ///< scanner centre ahead of the robot centre (base_link x)
+  double mount_offset_m = 0.0;  ///< laser optical centre off the rotation axis, along the plane [m]
+  int first_step = 44;          ///< URG-04LX AMIN
+  int last_step = 725;          ///< URG-04LX AMAX (682 beams)
+  int front_step = 384;         ///< AFRT: the step along the plane's "up" axis
+  int steps_per_turn = 1024;    ///< ARES
+  double min_range_m = 0.02;    ///< DMIN
+  double max_range_m = 5.6;     ///< DMAX
+  double plane_time_s = 0.1;    ///< time per plane (66.7 ms scan + 33.3 ms return)
   // Mixed pixels (thesis ch. 8, issue #20): a beam has a square footprint beam_divergence wide (in
   // the scan plane and across it); where the footprint covers surfaces at different depths, the
   // reading is their mix. Off by default: it changes the clouds, hence mission results.
   bool mixed_pixels = false;
   double beam_divergence_rad = 2.0 * M_PI / 1024.0;  ///< full width of the footprint [rad]; default one beam step
-  double mixed_pixel_threshold_m = 0.05;  ///< a sub-ray's hit this far off the centre's surface plane is a depth step [m]
-  int mixed_pixel_samples = 4;            ///< sub-rays per footprint axis (n x n sub-rays at a step)
+  double mixed_pixel_threshold_m =
+      0.05;                     ///< a sub-ray's hit this far off the centre's surface plane is a depth step [m]
+  int mixed_pixel_samples = 4;  ///< sub-rays per footprint axis (n x n sub-rays at a step)
 
   int beams() const { return last_step - first_step + 1; }
   /// Unit direction of beam `beam` (0-based) in plane `plane` of `planes`, in base_link.
@@ -48,12 +49,12 @@ struct ScannerConfig {
 
 /// Error model of one range reading (thesis 6.3) and of the transmission (chapter 3).
 struct SensorNoiseConfig {
-  double p_hit = 1.0;              ///< relative probability of a normal reading
-  double p_random = 0.0;           ///< ... of a random reading, uniform over [min, max] range
-  double p_max = 0.0;              ///< ... of a max-range reading (invalid: NaN in the cloud)
-  double sigma_near_m = 0.0;       ///< standard deviation of a normal reading up to 1 m [m]
-  double sigma_far_rel = 0.0;      ///< ... relative to the range beyond 1 m
-  double p_plane_loss = 0.0;       ///< probability that a whole plane is lost in transmission
+  double p_hit = 1.0;          ///< relative probability of a normal reading
+  double p_random = 0.0;       ///< ... of a random reading, uniform over [min, max] range
+  double p_max = 0.0;          ///< ... of a max-range reading (invalid: NaN in the cloud)
+  double sigma_near_m = 0.0;   ///< standard deviation of a normal reading up to 1 m [m]
+  double sigma_far_rel = 0.0;  ///< ... relative to the range beyond 1 m
+  double p_plane_loss = 0.0;   ///< probability that a whole plane is lost in transmission
   /// Throws ConfigError naming the parameter (`prefix` + field, e.g. profiles/thesis/sensor/p_hit).
   void validate(const std::string& prefix = "sensor/") const;
 };
@@ -62,19 +63,19 @@ struct SensorNoiseConfig {
 /// motion differs.
 struct MotionConfig {
   // forward motion
-  double curvature_per_m = 0.0;        ///< systematic curvature of a straight motion [1/m]
-  double curvature_sigma_per_m = 0.0;  ///< its Gaussian deviation [1/m]
-  double distance_error_rel = 0.0;     ///< systematic relative distance error
-  double distance_sigma_rel = 0.0;     ///< its Gaussian deviation
-  double finish_angle_rad = 0.0;       ///< systematic rotation at the end of a forward motion [rad]
-  double finish_angle_sigma_rad = 0.0; ///< its Gaussian deviation [rad]
+  double curvature_per_m = 0.0;         ///< systematic curvature of a straight motion [1/m]
+  double curvature_sigma_per_m = 0.0;   ///< its Gaussian deviation [1/m]
+  double distance_error_rel = 0.0;      ///< systematic relative distance error
+  double distance_sigma_rel = 0.0;      ///< its Gaussian deviation
+  double finish_angle_rad = 0.0;        ///< systematic rotation at the end of a forward motion [rad]
+  double finish_angle_sigma_rad = 0.0;  ///< its Gaussian deviation [rad]
   // rotation
-  double rotation_error_rel = 0.0;     ///< systematic relative angle error
-  double rotation_sigma_rel = 0.0;     ///< its Gaussian deviation
+  double rotation_error_rel = 0.0;                 ///< systematic relative angle error
+  double rotation_sigma_rel = 0.0;                 ///< its Gaussian deviation
   double rotation_position_sigma_m_per_rad = 0.0;  ///< Gaussian position change per radian turned [m/rad]
   // speeds (modelled durations)
-  double linear_speed_mps = 0.2;       ///< [m/s]
-  double angular_speed_radps = 0.5;    ///< [rad/s]
+  double linear_speed_mps = 0.2;     ///< [m/s]
+  double angular_speed_radps = 0.5;  ///< [rad/s]
   /// Throws ConfigError naming the parameter: error fields as `error_prefix` + field (e.g.
   /// profiles/thesis/motion/curvature_per_m), the speeds as `speed_prefix` + field (motion/linear_speed_mps).
   void validate(const std::string& error_prefix = "motion/", const std::string& speed_prefix = "motion/") const;

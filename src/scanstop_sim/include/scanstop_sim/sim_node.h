@@ -4,14 +4,14 @@
 /// (odom -> base_link, static world -> map and base_link -> laser), ground truth, the world as a
 /// marker and a modelled /clock.
 
+#include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
+#include <scanstop_msgs/AddHiddenObstacle.h>
 #include <scanstop_msgs/Forward.h>
 #include <scanstop_msgs/MotionClearance.h>
-#include <scanstop_msgs/AddHiddenObstacle.h>
 #include <scanstop_msgs/ResetSim.h>
 #include <scanstop_msgs/Rotate.h>
 #include <scanstop_msgs/TakeScan.h>
-#include <geometry_msgs/TransformStamped.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
@@ -43,7 +43,8 @@ class SimNode {
   bool onRotate(scanstop_msgs::Rotate::Request& req, scanstop_msgs::Rotate::Response& res);
   bool onForward(scanstop_msgs::Forward::Request& req, scanstop_msgs::Forward::Response& res);
   bool onReset(scanstop_msgs::ResetSim::Request& req, scanstop_msgs::ResetSim::Response& res);
-  bool onAddHiddenObstacle(scanstop_msgs::AddHiddenObstacle::Request& req, scanstop_msgs::AddHiddenObstacle::Response& res);
+  bool onAddHiddenObstacle(scanstop_msgs::AddHiddenObstacle::Request& req,
+                           scanstop_msgs::AddHiddenObstacle::Response& res);
   /// Runs one motion: refused (`refused` says why) while another one runs; with motion_time_scale
   /// > 0 it takes its modelled duration on the wall clock, during which odom carries its twist and
   /// scanner/take_scan is refused.
@@ -66,12 +67,12 @@ class SimNode {
 
   std::unique_ptr<Simulator> sim_;
   std::mutex mutex_;
-  std::atomic<bool> moving_{false};    ///< a rotate/forward motion is running
-  std::mutex master_mutex_;            ///< guards master_lost_ (mutex_ is held through a scan)
-  std::string master_lost_;            ///< non-empty while the ROS master is gone
-  double motion_time_scale_ = 0.0;     ///< wall seconds per modelled second of motion (0: at once)
-  double scan_time_scale_ = 0.0;       ///< wall seconds per modelled second of a scan (0: at once)
-  std::string state_file_;             ///< where the simulation state is kept after every step ("" = nowhere)
+  std::atomic<bool> moving_{false};  ///< a rotate/forward motion is running
+  std::mutex master_mutex_;          ///< guards master_lost_ (mutex_ is held through a scan)
+  std::string master_lost_;          ///< non-empty while the ROS master is gone
+  double motion_time_scale_ = 0.0;   ///< wall seconds per modelled second of motion (0: at once)
+  double scan_time_scale_ = 0.0;     ///< wall seconds per modelled second of a scan (0: at once)
+  std::string state_file_;           ///< where the simulation state is kept after every step ("" = nowhere)
   bool publish_clock_ = false;
   bool odom_as_map_ = false;  ///< publish map -> odom as identity (no SLAM running)
   double clock_start_s_ = 1.0;

@@ -55,23 +55,23 @@ class StateOfAnotherWorld : public std::invalid_argument {
 };
 
 struct ScanOutput {
-  PointCloud cloud;               ///< organized: height = planes, width = beams; base_link frame; NaN invalid
+  PointCloud cloud;  ///< organized: height = planes, width = beams; base_link frame; NaN invalid
   uint32_t raw_points = 0;
   uint32_t valid_points = 0;
   uint32_t planes_dropped = 0;
   uint32_t outliers_removed = 0;
-  uint32_t mixed_pixels = 0;      ///< readings mixed from surfaces at different depths (scanner.mixed_pixels)
+  uint32_t mixed_pixels = 0;            ///< readings mixed from surfaces at different depths (scanner.mixed_pixels)
   uint32_t mixed_pixel_candidates = 0;  ///< beams that cast sub-rays (a neighbour off their surface)
-  double duration_s = 0.0;        ///< modelled
+  double duration_s = 0.0;              ///< modelled
 };
 
 /// How far MotionOutput::min_clearance_m is measured [m].
 constexpr double kClearanceRange = 1.0;
 
 struct MotionOutput {
-  double achieved = 0.0;          ///< as odometry measured it: [m] or [rad]
+  double achieved = 0.0;  ///< as odometry measured it: [m] or [rad]
   bool collision = false;
-  double duration_s = 0.0;        ///< modelled
+  double duration_s = 0.0;  ///< modelled
   /// Ground truth: the smallest distance between the robot's body (the robot_radius disc) and the
   /// world's obstacles along the motion (every true pose it passed), measured up to
   /// kClearanceRange (that value: at least as far); 0 at a contact [m].

@@ -20,10 +20,10 @@ namespace sim {
 
 /// How a world is checked and which geometry blocks the robot.
 struct WorldOptions {
-  bool require_floor = true;          ///< a world without floor triangles near z = 0 is an error
-  double floor_tolerance_m = 0.01;    ///< |z| below which a horizontal triangle counts as floor
-  double obstacle_min_z_m = 0.03;     ///< geometry above this height blocks the robot (thresholds, carpets below) [m]
-  double obstacle_max_z_m = 0.60;     ///< ... and below this height (the robot's height) [m]
+  bool require_floor = true;        ///< a world without floor triangles near z = 0 is an error
+  double floor_tolerance_m = 0.01;  ///< |z| below which a horizontal triangle counts as floor
+  double obstacle_min_z_m = 0.03;   ///< geometry above this height blocks the robot (thresholds, carpets below) [m]
+  double obstacle_max_z_m = 0.60;   ///< ... and below this height (the robot's height) [m]
   /// The world's surface materials (materials.h). Empty: World::load takes `<world>.materials.yaml`
   /// next to the STL when that file exists (every surface diffuse otherwise); fromMesh none. A
   /// path: that file, which must exist.
@@ -34,7 +34,7 @@ struct WorldOptions {
 struct RayHit {
   static constexpr unsigned kNone = 0xFFFFFFFFu;
   float t = std::numeric_limits<float>::infinity();  ///< distance along the unit direction [m]
-  unsigned prim = kNone;                              ///< the triangle's index in mesh().faces
+  unsigned prim = kNone;                             ///< the triangle's index in mesh().faces
   bool hit() const { return prim != kNone; }
 };
 
@@ -48,7 +48,8 @@ class World {
   /// malformed, empty, no floor).
   static World load(const std::string& path, const WorldOptions& options = WorldOptions());
   /// Builds a world from a mesh in memory (`name` for messages); same checks as load().
-  static World fromMesh(const TriangleMesh& mesh, const std::string& name, const WorldOptions& options = WorldOptions());
+  static World fromMesh(const TriangleMesh& mesh, const std::string& name,
+                        const WorldOptions& options = WorldOptions());
 
   World(World&&) noexcept;
   World& operator=(World&&) noexcept;

@@ -75,10 +75,10 @@ class WorldBuilder {
 
 /// One of the project's worlds.
 struct WorldSpec {
-  std::string name;         ///< file name without .stl
+  std::string name;  ///< file name without .stl
   std::string description;
-  Eigen::Vector2d size_m;   ///< outer footprint
-  Pose2D start;             ///< documented start pose (world frame)
+  Eigen::Vector2d size_m;  ///< outer footprint
+  Pose2D start;            ///< documented start pose (world frame)
   TriangleMesh mesh;
   std::string materials_yaml;  ///< the world's <name>.materials.yaml (materials.h); empty: none
 };

@@ -24,9 +24,10 @@ namespace slam {
 
 /// What VoxelMap::nearest() knows about the surface at the point it found (for IcpConfig::same_side).
 struct Surface {
-  bool planar = false;                                 ///< the point's voxel holds one plane (normal is valid)
-  Eigen::Vector3f normal = Eigen::Vector3f::Zero();    ///< that plane's unit normal (either sign)
-  Eigen::Vector3f view = Eigen::Vector3f::Zero();      ///< unit vector from the point to the sensor that saw it (zero: not known)
+  bool planar = false;                               ///< the point's voxel holds one plane (normal is valid)
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< that plane's unit normal (either sign)
+  Eigen::Vector3f view =
+      Eigen::Vector3f::Zero();  ///< unit vector from the point to the sensor that saw it (zero: not known)
 };
 
 /// A voxel hash of map points for nearest-neighbour queries within a fixed radius.
@@ -136,12 +137,12 @@ IcpMethod parseIcpMethod(const std::string& text, const std::string& name = "met
 /// in m along the source frame's axes, w in rad about its origin (so one radian weighs like one
 /// metre: eigenvalues and directions mix the two units as a scene of metres does).
 struct IcpConfig {
-  double c_max_m = 0.10;              ///< correspondence distance [m]
-  double t_c_m = 0.0005;              ///< convergence: translation change per iteration [m]
-  double r_c_rad = 0.02 * M_PI / 180; ///< convergence: rotation change per iteration [rad]
+  double c_max_m = 0.10;               ///< correspondence distance [m]
+  double t_c_m = 0.0005;               ///< convergence: translation change per iteration [m]
+  double r_c_rad = 0.02 * M_PI / 180;  ///< convergence: rotation change per iteration [rad]
   int max_iterations = 100;
-  bool six_dof = false;               ///< false: 3dof (rotation about z, translation in x, y)
-  bool accelerate = true;             ///< Besl-McKay extrapolation of consistent steps (fewer iterations)
+  bool six_dof = false;    ///< false: 3dof (rotation about z, translation in x, y)
+  bool accelerate = true;  ///< Besl-McKay extrapolation of consistent steps (fewer iterations)
   /// 3dof: leave out correspondences on horizontal surfaces (floor, ceiling). They cannot fix x, y or
   /// yaw, but their near-identity pairs outnumber the walls' and hold every step back.
   bool ignore_horizontal = true;
@@ -196,27 +197,27 @@ struct IcpConfig {
   double information_sigma_m = 0.01;  ///< [m], (0, 1]
   // Failure detection.
   int min_correspondences = 200;
-  double min_overlap = 0.05;          ///< correspondences / source points
-  double max_correction_m = 1.0;      ///< a correction of the initial guess larger than this fails [m]
-  double max_correction_rad = 0.5;    ///< ... or a rotation larger than this [rad]
+  double min_overlap = 0.05;        ///< correspondences / source points
+  double max_correction_m = 1.0;    ///< a correction of the initial guess larger than this fails [m]
+  double max_correction_rad = 0.5;  ///< ... or a rotation larger than this [rad]
   void validate() const;
 };
 
 /// The outcome of one registration.
 struct IcpResult {
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();  ///< maps source points into the target frame
-  bool converged = false;       ///< converged within max_iterations and passed the checks
-  std::string failure;          ///< why not (empty when converged)
+  bool converged = false;  ///< converged within max_iterations and passed the checks
+  std::string failure;     ///< why not (empty when converged)
   int iterations = 0;
   size_t correspondences = 0;
-  double rms_m = 0.0;           ///< RMS distance of the final correspondences [m]
-  double overlap = 0.0;         ///< correspondences / source points
+  double rms_m = 0.0;    ///< RMS distance of the final correspondences [m]
+  double overlap = 0.0;  ///< correspondences / source points
   /// Gauss-Newton Hessian J^T J of the point-to-plane residuals (R p + t - m) . n of the final pairs
   /// with a planar map normal, at the result (either method), over the pose parameters of
   /// IcpConfig (3x3 for 3dof, 6x6 for 6dof) [1/m^2 per residual m^2; unweighted sum over pairs].
   /// 3dof with ignore_horizontal: without the horizontal pairs, as the solve. Empty if no pair.
   Eigen::MatrixXd information;
-  size_t information_pairs = 0;    ///< pairs in it (planar map normal)
+  size_t information_pairs = 0;  ///< pairs in it (planar map normal)
   /// Eigenvalues (ascending) of the information matrix in normalized pose parameters: translation
   /// [m], and rotation about the centroid c of those pairs' source points times their RMS distance
   /// L from c [m] (3dof: horizontal distance); i.e. A^T information A with t = t' + c x w, w = u / L.
@@ -231,7 +232,7 @@ struct IcpResult {
   Eigen::VectorXd weak_direction;
   /// smallest / largest eigenvalue < IcpConfig::degeneracy_ratio (false without information).
   bool degenerate = false;
-  int weak_directions = 0;         ///< eigenvalues below degeneracy_ratio times the largest
+  int weak_directions = 0;  ///< eigenvalues below degeneracy_ratio times the largest
   /// degeneracy_remap changed the result (point_to_point: the correction was projected;
   /// point_to_plane: some step had a weak direction).
   bool remapped = false;

@@ -68,7 +68,7 @@ struct SlamConfig {
   /// undoes up to ~15 cm of edge pull-back by the coarse stage [m], [0, 10]; [rad], [0, pi]
   double refine_max_correction_m = 0.25;
   double refine_max_correction_rad = 2.0 * M_PI / 180;
-  double source_voxel_m = 0.02;   ///< scan points used for matching: one per voxel of this size (0 = all) [m]
+  double source_voxel_m = 0.02;  ///< scan points used for matching: one per voxel of this size (0 = all) [m]
   /// true: that one point is the voxel's mean (voxelCentroids), for every matching subset (source,
   /// coarse, refine, relaxation); false: the voxel's first point in scan order (voxelDownsample),
   /// which sits where the sweep entered the voxel: room_10x8 seed 7 replay (point-to-plane) ATE
@@ -195,15 +195,15 @@ struct SkippedScan {
 /// One registered scan.
 struct Registration {
   uint32_t index = 0;
-  Pose2D map_pose;            ///< corrected pose of base_link in the map frame
-  Pose2D guess;               ///< the initial guess from odometry
+  Pose2D map_pose;  ///< corrected pose of base_link in the map frame
+  Pose2D guess;     ///< the initial guess from odometry
   bool converged = false;
-  std::string failure;        ///< why the registration failed (empty when it converged)
+  std::string failure;  ///< why the registration failed (empty when it converged)
   int iterations = 0;
   size_t correspondences = 0;
   double rms_m = 0.0;
   double overlap = 0.0;
-  double time_s = 0.0;        ///< compute time [s]
+  double time_s = 0.0;  ///< compute time [s]
   /// The refinement stage: how far it moved the thesis stage's result, and whether that was too far
   /// (SlamConfig::refine_max_correction_m: the thesis stage's result stands).
   double refine_moved_m = 0.0;
@@ -342,10 +342,10 @@ class IcpSlam {
   struct KeptScan {
     uint32_t index = 0;
     double stamp_s = 0.0;
-    Pose2D pose;                          ///< where the map holds it (applied)
-    std::vector<Eigen::Vector3f> points;  ///< relax_voxel_m-downsampled, base_link (relax only)
+    Pose2D pose;                                       ///< where the map holds it (applied)
+    std::vector<Eigen::Vector3f> points;               ///< relax_voxel_m-downsampled, base_link (relax only)
     Eigen::Vector3f origin = Eigen::Vector3f::Zero();  ///< sensor origin in base_link
-    Pose2D odom;                ///< its odometry pose
+    Pose2D odom;                                       ///< its odometry pose
     bool scale_evidence = true;  ///< converged and not degenerate: its leg tells the odometry scale
   };
   /// SlamConfig::odom_scale_estimation's factor from the kept scans' legs (1 without evidence).

@@ -47,15 +47,15 @@ struct PoseGraphConfig {
 
 /// What optimize() did.
 struct PoseGraphSummary {
-  bool solved = false;          ///< the solver ran and reported a usable solution (false: poses unchanged)
-  std::string message;          ///< the solver's report (why not, when !solved)
+  bool solved = false;  ///< the solver ran and reported a usable solution (false: poses unchanged)
+  std::string message;  ///< the solver's report (why not, when !solved)
   int iterations = 0;
-  double initial_cost = 0.0;    ///< 0.5 * sum of (robustified) squared whitened residuals, before
-  double final_cost = 0.0;      ///< ... and after
-  size_t moved = 0;             ///< nodes that moved by more than 1e-9 m or rad
-  double max_moved_m = 0.0;     ///< largest position change of a node [m]
-  double max_moved_rad = 0.0;   ///< largest yaw change of a node [rad]
-  double time_s = 0.0;          ///< solver wall time [s]
+  double initial_cost = 0.0;   ///< 0.5 * sum of (robustified) squared whitened residuals, before
+  double final_cost = 0.0;     ///< ... and after
+  size_t moved = 0;            ///< nodes that moved by more than 1e-9 m or rad
+  double max_moved_m = 0.0;    ///< largest position change of a node [m]
+  double max_moved_rad = 0.0;  ///< largest yaw change of a node [rad]
+  double time_s = 0.0;         ///< solver wall time [s]
 };
 
 class PoseGraph {

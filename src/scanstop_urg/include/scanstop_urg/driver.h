@@ -36,7 +36,7 @@ StreamFactory serialStreamFactory();
 /// Counters for diagnostics (cumulative since start).
 struct DriverStats {
   bool connected = false;
-  std::string state;                ///< "connected: <device>" or why not
+  std::string state;  ///< "connected: <device>" or why not
   uint64_t connects = 0, connection_losses = 0;
   uint64_t scans_ok = 0, scans_failed = 0;
   uint64_t planes_dropped = 0, plane_retries = 0;

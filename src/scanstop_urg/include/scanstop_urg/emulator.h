@@ -16,14 +16,14 @@ namespace urg {
 /// A closed box room (walls, floor z = 0, ceiling) with the robot standing in it; one wall carries
 /// a dark patch that returns "reflection too weak" (error code 1). All lengths in metres.
 struct BoxRoomScene {
-  double x_min = -3.0, x_max = 3.0;   ///< walls [m] (world frame)
-  double y_min = -2.5, y_max = 2.5;   ///< walls [m]
-  double z_max = 2.5;                 ///< ceiling [m]; the floor is z = 0
+  double x_min = -3.0, x_max = 3.0;                       ///< walls [m] (world frame)
+  double y_min = -2.5, y_max = 2.5;                       ///< walls [m]
+  double z_max = 2.5;                                     ///< ceiling [m]; the floor is z = 0
   double robot_x = 0.4, robot_y = -0.3, robot_yaw = 0.3;  ///< base_link in the world [m, rad]
-  double scanner_height = 0.45;       ///< rotation centre above the floor [m]
-  double scanner_x_offset = 0.0;      ///< rotation axis ahead of base_link [m]
-  double mount_offset = 0.0;          ///< optical centre off the rotation axis, along the plane [m]
-  bool dark_patch = true;             ///< a 0.6 x 0.4 m patch on the x_max wall (y in [-0.3, 0.3], z in [1.0, 1.4])
+  double scanner_height = 0.45;                           ///< rotation centre above the floor [m]
+  double scanner_x_offset = 0.0;                          ///< rotation axis ahead of base_link [m]
+  double mount_offset = 0.0;                              ///< optical centre off the rotation axis, along the plane [m]
+  bool dark_patch = true;  ///< a 0.6 x 0.4 m patch on the x_max wall (y in [-0.3, 0.3], z in [1.0, 1.4])
   /// The URG value (mm, or an error code below 20) of step `step` when the platform is at `phi_rad`
   /// (0 = scan plane along the robot's x axis), for a URG with ARES 1024, AFRT 384, DMAX 5600.
   uint32_t value(double phi_rad, int step) const;

@@ -13,8 +13,8 @@
 ///   |           | (the position becomes unknown: home next)             |                     |
 ///   | `HM`      | home: turn to the index switch, position 0            | none                |
 ///   | `ST`      | step: advance one position (pi / count)               | `pppp` new position |
-///   | `SS`      | status                                                | `ppppnnnnhee`: position, count, homed 0/1, latched error |
-///   | `ER`      | read and clear the latched error                      | `ee`                |
+///   | `SS`      | status                                                | `ppppnnnnhee`: position, count, homed 0/1,
+///   latched error | | `ER`      | read and clear the latched error                      | `ee`                |
 ///
 /// A failed command latches its status as the error. A stall loses the position (homed = 0).
 /// The reply to a line with a bad sum is `XX05S`. Position k means the angle k * pi / count.
@@ -42,8 +42,8 @@ class PlatformError : public std::runtime_error {
 };
 
 namespace stepper {
-constexpr int kOk = 0, kNotHomed = 1, kBadParameter = 2, kStall = 3, kEndOfTravel = 4, kBadSum = 5,
-              kUnknownCommand = 6, kNotConfigured = 7;
+constexpr int kOk = 0, kNotHomed = 1, kBadParameter = 2, kStall = 3, kEndOfTravel = 4, kBadSum = 5, kUnknownCommand = 6,
+              kNotConfigured = 7;
 constexpr int kMaxCount = 4000;
 /// The meaning of a status code.
 const char* statusMeaning(int status);
@@ -62,10 +62,10 @@ Reply parseReply(const std::string& line);
 
 /// Where the platform stands.
 struct PlatformStatus {
-  int position = 0;   ///< plane index
-  int count = 0;      ///< positions per half turn
+  int position = 0;  ///< plane index
+  int count = 0;     ///< positions per half turn
   bool homed = false;
-  int error = 0;      ///< latched error code (0 = none)
+  int error = 0;  ///< latched error code (0 = none)
 };
 
 /// A drive that turns the scan plane in `planes` equal steps over half a turn.

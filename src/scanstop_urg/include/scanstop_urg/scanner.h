@@ -52,10 +52,10 @@ size_t assemblePlane(PointCloud& cloud, const ScanGeometry& geometry, int plane,
 
 struct ScannerConfig {
   ScanGeometry geometry;
-  int max_plane_retries = 3;         ///< re-reads of a plane after a transmission error
-  int max_consecutive_dropped = 3;   ///< abort the scan when this many planes in a row are lost
-  double settle_time_s = 0.02;       ///< wait after a platform step before the GD [s]
-  bool outlier_filter = true;        ///< apply the thesis 3.4 filter
+  int max_plane_retries = 3;        ///< re-reads of a plane after a transmission error
+  int max_consecutive_dropped = 3;  ///< abort the scan when this many planes in a row are lost
+  double settle_time_s = 0.02;      ///< wait after a platform step before the GD [s]
+  bool outlier_filter = true;       ///< apply the thesis 3.4 filter
   OutlierFilterConfig filter;
   void validate() const;
 };
@@ -63,16 +63,16 @@ struct ScannerConfig {
 /// The outcome of one full scan.
 struct ScanResult {
   bool success = false;
-  std::string message;              ///< why it failed, or a summary
-  PointCloud cloud;                 ///< organized, base_link, NaN = invalid
-  uint32_t raw_points = 0;          ///< planes x beams
-  uint32_t valid_points = 0;        ///< finite points after all filtering
-  uint32_t planes_dropped = 0;      ///< planes lost after the bounded re-reads
+  std::string message;          ///< why it failed, or a summary
+  PointCloud cloud;             ///< organized, base_link, NaN = invalid
+  uint32_t raw_points = 0;      ///< planes x beams
+  uint32_t valid_points = 0;    ///< finite points after all filtering
+  uint32_t planes_dropped = 0;  ///< planes lost after the bounded re-reads
   uint32_t outliers_removed = 0;
-  uint32_t plane_retries = 0;       ///< re-reads of planes
-  uint32_t error_codes = 0;         ///< readings the URG reported as error codes (below DMIN)
-  double duration_s = 0.0;          ///< wall time [s]
-  bool device_lost = false;         ///< the link failed: reconnect before the next scan
+  uint32_t plane_retries = 0;  ///< re-reads of planes
+  uint32_t error_codes = 0;    ///< readings the URG reported as error codes (below DMIN)
+  double duration_s = 0.0;     ///< wall time [s]
+  bool device_lost = false;    ///< the link failed: reconnect before the next scan
 };
 
 /// Takes full scans with a URG and a rotation platform.

@@ -9,8 +9,8 @@ namespace scanstop {
 namespace urg {
 
 struct StandstillConfig {
-  double max_linear_speed_mps = 0.01;    ///< [m/s] |twist.linear.x| above this: the base moves
-  double max_angular_speed_radps = 0.02; ///< [rad/s] |twist.angular.z| above this: the base moves
+  double max_linear_speed_mps = 0.01;     ///< [m/s] |twist.linear.x| above this: the base moves
+  double max_angular_speed_radps = 0.02;  ///< [rad/s] |twist.angular.z| above this: the base moves
   /// Throws ConfigError naming the parameter (standstill/max_linear_speed, standstill/max_angular_speed).
   void validate() const;
 };

@@ -34,8 +34,8 @@ struct LinkStats {
   uint64_t checksum_errors = 0;
   uint64_t format_errors = 0;
   uint64_t timeouts = 0;
-  uint64_t skipped_lines = 0;   ///< lines before the expected echo (stale replies, garbage)
-  uint64_t scip11_switches = 0; ///< times the device had to be switched from SCIP 1.1
+  uint64_t skipped_lines = 0;    ///< lines before the expected echo (stale replies, garbage)
+  uint64_t scip11_switches = 0;  ///< times the device had to be switched from SCIP 1.1
 };
 
 class UrgDevice {

@@ -58,8 +58,8 @@ class UrgDriverNode {
   bool require_odom_ = true;
   bool was_connected_ = false;
   StandstillConfig standstill_;
-  std::mutex odom_mutex_;          ///< guards the three below
-  std::string base_motion_;        ///< why the base moves now (last odom twist); empty: standing still
+  std::mutex odom_mutex_;    ///< guards the three below
+  std::string base_motion_;  ///< why the base moves now (last odom twist); empty: standing still
   bool scanning_ = false;
   std::string moved_during_scan_;  ///< the first motion seen while scanning
   ros::Subscriber odom_sub_;

@@ -19,8 +19,7 @@ template <typename T>
 T require(const ros::NodeHandle& nh, const std::string& name) {
   T value;
   if (!nh.hasParam(name)) throw ConfigError("required parameter '" + nh.resolveName(name) + "' is not set");
-  if (!nh.getParam(name, value))
-    throw ConfigError("parameter '" + nh.resolveName(name) + "' has the wrong type");
+  if (!nh.getParam(name, value)) throw ConfigError("parameter '" + nh.resolveName(name) + "' has the wrong type");
   return value;
 }
 
@@ -29,8 +28,7 @@ T require(const ros::NodeHandle& nh, const std::string& name) {
 template <typename T>
 void optional(const ros::NodeHandle& nh, const std::string& name, T& value) {
   if (!nh.hasParam(name)) return;
-  if (!nh.getParam(name, value))
-    throw ConfigError("parameter '" + nh.resolveName(name) + "' has the wrong type");
+  if (!nh.getParam(name, value)) throw ConfigError("parameter '" + nh.resolveName(name) + "' has the wrong type");
 }
 
 /// Parameters set in nh's namespace (directly or below it) whose first name component is not in
@@ -43,8 +41,7 @@ inline std::vector<std::string> unknownParameters(const ros::NodeHandle& nh, con
     if (name.compare(0, prefix.size(), prefix) != 0) continue;
     const std::string key = name.substr(prefix.size());
     bool is_known = false;
-    for (const std::string& k : known)
-      is_known = is_known || key == k || key.compare(0, k.size() + 1, k + "/") == 0;
+    for (const std::string& k : known) is_known = is_known || key == k || key.compare(0, k.size() + 1, k + "/") == 0;
     if (!is_known) unknown.push_back(name);
   }
   return unknown;
@@ -59,8 +56,9 @@ inline void requireFrames(const ros::NodeHandle& nh, const std::vector<std::pair
                         "' must be a non-empty frame id without a leading '/' or space");
     for (size_t j = 0; j < i; ++j)
       if (frames[i].second == frames[j].second)
-        throw ConfigError("parameters '" + nh.resolveName(frames[j].first) + "' and '" + nh.resolveName(frames[i].first) +
-                          "' are both '" + frames[i].second + "': the frames must differ");
+        throw ConfigError("parameters '" + nh.resolveName(frames[j].first) + "' and '" +
+                          nh.resolveName(frames[i].first) + "' are both '" + frames[i].second +
+                          "': the frames must differ");
   }
 }
 
