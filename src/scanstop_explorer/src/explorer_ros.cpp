@@ -157,13 +157,9 @@ std::string planRequestProblem(const scanstop_msgs::PlanNext::Request& req, cons
 ExplorerNode::ExplorerNode(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh) {
   ExplorerConfig config;
   readParameters(pnh, config, node_config_);
-  // The configuration of this run as a file (run_dir/config.yaml): what plan_step --config and the
-  // evaluation (mission_node's true coverage, floor_coverage --config) rebuild the floor map with.
-  if (!node_config_.run_dir.empty())
-    writeFileAtomic(node_config_.run_dir + "/config.yaml",
-                    parameterFileText(config, "explorer_node " + pnh.getNamespace() +
-                                                  ": the parameters of this run, the robot body applied\n"
-                                                  "(plan_step --config and floor_coverage --config read this file)"));
+  config_text_ = parameterFileText(config, "explorer_node " + pnh.getNamespace() +
+                                               ": the parameters of this run, the robot body applied\n"
+                                               "(plan_step --config and floor_coverage --config read this file)");
   explorer_ = std::make_unique<Explorer>(config);
   loadMapDir();
   // Number the steps on from what an earlier run left in run_dir (a restarted node loses nothing).
@@ -385,6 +381,11 @@ void ExplorerNode::writeImages(const PlanResult& r) {
   char prefix[32];
   std::snprintf(prefix, sizeof(prefix), "step_%03u_", step_);
   try {
+    // The configuration of this run (run_dir/config.yaml), with the first plan's files (not at start:
+    // a run directory the mission refuses stays as it was): what plan_step --config and the
+    // evaluation (mission_node's true coverage, floor_coverage --config) rebuild the floor map with.
+    if (!config_written_) writeFileAtomic(node_config_.run_dir + "/config.yaml", config_text_);
+    config_written_ = true;
     writePlanImages(r, node_config_.run_dir, prefix, node_config_.image_scale);
     writeFileAtomic(node_config_.run_dir + "/" + prefix + "plan.json", planToJson(r) + "\n");
     writeFileAtomic(node_config_.run_dir + "/" + prefix + "path.csv", pathToCsv(r));

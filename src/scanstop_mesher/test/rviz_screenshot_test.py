@@ -9,13 +9,14 @@ import sys
 import time
 import unittest
 
+import rospkg
 import rospy
 import rostest
 from roslib.packages import find_node
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import MarkerArray
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(rospkg.RosPack().get_path("scanstop_common"), "scripts"))
 import xwd_image  # noqa: E402
 
 # rviz lines that are not display errors (Debian's rviz asks rospack for an optional package).

@@ -77,7 +77,7 @@ class MasterWatchdog(unittest.TestCase):
         run = os.path.join(cls.tmp, "run")
         os.makedirs(run)
         cls.run_dir = run
-        common = ["_master_timeout:=%.1f" % TIMEOUT_S]
+        common = ["_master_timeout_s:=%.1f" % TIMEOUT_S]
         args = {
             "sim_node": ("scanstop_sim", ["_world:=" + ROOM, "_error_profile:=perfect", "_odom_as_map:=true"]),
             "icp_slam_node": ("scanstop_slam", ["_map_dir:=" + os.path.join(run, "map")]),

@@ -131,6 +131,8 @@ SimNode::SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   if (!(scan_time_scale_ >= 0.0 && scan_time_scale_ <= 10.0))
     throw ConfigError("parameter '" + pnh.resolveName("scan_time_scale") + "' = " + std::to_string(scan_time_scale_) +
                       " is out of range [0, 10]");
+  // rviz's view of the world from above: the ceiling would hide the room (display only).
+  params.optional("world_display_max_z_m", world_display_max_z_m_, 0.1, 1000.0, "m");
 
   std::string start_text;
   params.optional("start_pose", start_text);
@@ -302,6 +304,10 @@ void SimNode::publishWorldMarker() {
   const TriangleMesh& mesh = sim_->world().mesh();
   m.points.reserve(mesh.faces.size() * 3);
   for (const auto& f : mesh.faces) {
+    // The ceiling (a triangle wholly above world_display_max_z_m) is left out: it hides the room.
+    if (mesh.vertices[f[0]].z() > world_display_max_z_m_ && mesh.vertices[f[1]].z() > world_display_max_z_m_ &&
+        mesh.vertices[f[2]].z() > world_display_max_z_m_)
+      continue;
     for (int k = 0; k < 3; ++k) {
       geometry_msgs::Point p;
       p.x = mesh.vertices[f[k]].x();

@@ -56,7 +56,9 @@ class ExplorerNode {
   ros::NodeHandle nh_;
   NodeConfig node_config_;
   std::unique_ptr<Explorer> explorer_;
-  unsigned step_ = 1;  ///< number of the next plan (image prefix step_NNN_)
+  unsigned step_ = 1;            ///< number of the next plan (image prefix step_NNN_)
+  std::string config_text_;      ///< the configuration as a parameter file (run_dir/config.yaml)
+  bool config_written_ = false;  ///< written with the first plan's files
   ros::Subscriber scan_sub_;
   ros::ServiceServer plan_srv_;
   ros::Publisher floor_pub_, accessible_pub_, distance_pub_, cost_pub_, knowledge_pub_, evaluation_pub_;

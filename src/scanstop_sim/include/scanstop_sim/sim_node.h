@@ -67,12 +67,13 @@ class SimNode {
 
   std::unique_ptr<Simulator> sim_;
   std::mutex mutex_;
-  std::atomic<bool> moving_{false};  ///< a rotate/forward motion is running
-  std::mutex master_mutex_;          ///< guards master_lost_ (mutex_ is held through a scan)
-  std::string master_lost_;          ///< non-empty while the ROS master is gone
-  double motion_time_scale_ = 0.0;   ///< wall seconds per modelled second of motion (0: at once)
-  double scan_time_scale_ = 0.0;     ///< wall seconds per modelled second of a scan (0: at once)
-  std::string state_file_;           ///< where the simulation state is kept after every step ("" = nowhere)
+  std::atomic<bool> moving_{false};     ///< a rotate/forward motion is running
+  std::mutex master_mutex_;             ///< guards master_lost_ (mutex_ is held through a scan)
+  std::string master_lost_;             ///< non-empty while the ROS master is gone
+  double motion_time_scale_ = 0.0;      ///< wall seconds per modelled second of motion (0: at once)
+  double scan_time_scale_ = 0.0;        ///< wall seconds per modelled second of a scan (0: at once)
+  double world_display_max_z_m_ = 2.0;  ///< sim/world_mesh leaves out triangles wholly above this [m]
+  std::string state_file_;              ///< where the simulation state is kept after every step ("" = nowhere)
   bool publish_clock_ = false;
   bool odom_as_map_ = false;  ///< publish map -> odom as identity (no SLAM running)
   double clock_start_s_ = 1.0;

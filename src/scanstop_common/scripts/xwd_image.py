@@ -1,4 +1,6 @@
-"""Reads an X window dump (xwd -root, 24/32-bit TrueColor) and writes it as PNG; no imaging library."""
+"""Reads an X window dump (xwd -root, 24/32-bit TrueColor) and writes it as PNG; no imaging library.
+The screenshot tests of rviz (scanstop_sim, scanstop_mesher) read their screenshots with it and look at
+what a user sees: where the render panel is, and what colour a world point has on it."""
 import struct
 import zlib
 
@@ -65,3 +67,34 @@ def distinct_colors(rows, step=4):
         for x in range(0, len(r) - 2, 3 * step):
             seen.add(r[x:x + 3])
     return len(seen)
+
+
+def pixel(rows, x, y):
+    """(r, g, b) at column x, row y."""
+    row = rows[y]
+    return row[3 * x], row[3 * x + 1], row[3 * x + 2]
+
+
+def bounding_box(width, height, rows, colour, tolerance=2):
+    """(x0, y0, x1, y1) of the pixels within `tolerance` of `colour` (inclusive), or None. rviz's
+    render panel is the box of its background colour when the scene leaves some of it free all round."""
+    r0, g0, b0 = colour
+    xs, ys = [], []
+    for y in range(height):
+        row = rows[y]
+        for x in range(0, width, 2):  # every other column is enough for a box
+            if abs(row[3 * x] - r0) <= tolerance and abs(row[3 * x + 1] - g0) <= tolerance and \
+                    abs(row[3 * x + 2] - b0) <= tolerance:
+                xs.append(x)
+                ys.append(y)
+                break
+        else:
+            continue
+        for x in range(width - 1, -1, -2):
+            if abs(row[3 * x] - r0) <= tolerance and abs(row[3 * x + 1] - g0) <= tolerance and \
+                    abs(row[3 * x + 2] - b0) <= tolerance:
+                xs.append(x)
+                break
+    if not xs:
+        return None
+    return min(xs), min(ys), max(xs), max(ys)
