@@ -553,7 +553,7 @@ TEST(Mission, ScanOnTheWayByErrorScansAtALandmarkOnlyWhereTheNextLegWouldLeaveTh
       EXPECT_NEAR(xs[3], 9.0, 0.1);
       const bool logged = std::any_of(lines.begin(), lines.end(), [](const std::string& l) {
         return l.find("scanning on the way at (5.9") != std::string::npos &&
-               l.find("scan_error_bound 0.30 m") != std::string::npos;
+               l.find("scan_error_bound_m 0.30 m") != std::string::npos;
       });
       EXPECT_TRUE(logged);
     } else {  // no scan on the way (the fake replans once more to the far target, 0.2 m short of it)
