@@ -99,6 +99,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   params.optional("mesh_method", c.mesh_method);
   params.optional("fused_voxel_m", c.fused_voxel_m);
   params.optional("fused_carve_m", c.fused_carve_m);
+  params.optional("fused_map_output", c.fused_map_output);
   params.rejectUnknown();
   c.validate();
   if (c.require_map) requireMapDirectory(c.map_dir);
@@ -111,6 +112,8 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
       "mesher/mesh_markers", 1, [this](const ros::SingleSubscriberPublisher& pub) { onMarkerSubscriber(pub); },
       ros::SubscriberStatusCallback(), ros::VoidConstPtr(), false);
   build_srv_ = nh.advertiseService("mesher/build_mesh", &BpaMesherNode::onBuildMesh, this);
+  // The fused map's surface points (a fused mesh_method), latched: one message per build.
+  fused_pub_ = nh.advertise<sensor_msgs::PointCloud2>("mesher/fused_cloud", 1, true);
   if (!c.load_mesh.empty()) {
     reloadMesh();  // a file that exists but cannot be read stops the node
     if (mesh_mtime_ns_ < 0)
@@ -234,12 +237,27 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   fc.truncation_m = 3.0 * config_.fused_voxel_m;
   fc.carve_m = config_.fused_carve_m;
   std::vector<std::string> skipped;
-  const FusedMesh r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped);
+  // The fused map is kept with the run: beside the mesh unless fused_map_output says where.
+  const std::string vdb = !config_.fused_map_output.empty()
+                              ? config_.fused_map_output
+                              : output.substr(0, output.find_last_of('/') + 1) + "fused_map.vdb";
+  const FusedMesh r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped, vdb);
   for (const std::string& s : skipped) ROS_ERROR("bpa_mesher_node: %s", s.c_str());
+  if (!r.save_problem.empty()) {
+    ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", r.save_problem.c_str());
+    skipped.push_back("the fused map was not saved: " + r.save_problem);
+  }
+  PointCloud surface;
+  for (const Eigen::Vector3f& p : r.surface)
+    if (p.z() <= config_.display_max_z_m) surface.points.push_back(p);  // the ceiling cut away for the view
+  surface.setUnorganized();
+  fused_pub_.publish(ros_conv::toMsg(surface, config_.frame_id, ros::Time::now()));
   std::ostringstream msg;
   msg << r.mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << r.scans
       << " scans of map " << config_.map_dir << " (voxel " << fc.voxel_m << " m, " << r.voxels << " voxels, "
-      << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s)";
+      << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s; "
+      << (r.save_problem.empty() ? "fused map in " + vdb : std::string("fused map not saved")) << ", "
+      << r.surface.size() << " surface points)";
   finishMesh(r.mesh, output, r.surface_points, msg.str(), skipped, res);
 }
 

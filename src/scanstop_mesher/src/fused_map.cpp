@@ -405,7 +405,8 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
 bool isFusedMeshMethod(const std::string& method) { return method == "marching_cubes" || method == "fused_bpa"; }
 
 FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
-                                const MesherConfig& bpa, std::vector<std::string>* skipped) {
+                                const MesherConfig& bpa, std::vector<std::string>* skipped,
+                                const std::string& save_path) {
   if (!isFusedMeshMethod(method))
     throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
   FusedMap fused(config);
@@ -415,14 +416,20 @@ FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& co
   out.voxels = fused.activeVoxels();
   out.memory_bytes = fused.memoryBytes();
   const auto start = std::chrono::steady_clock::now();
+  const ScanPoints surface = fused.surfacePoints();
   if (method == "marching_cubes") {
     out.mesh = fused.extractMesh();
   } else {
-    const ScanPoints surface = fused.surfacePoints();
     out.surface_points = surface.size();
     if (surface.size() > 0) out.mesh = buildMesh(surface, bpa).mesh;
   }
   out.mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.surface = surface.points;
+  if (!save_path.empty()) try {
+      fused.save(save_path);
+    } catch (const IoError& e) {
+      out.save_problem = e.what();
+    }
   if (out.mesh.faces.empty())
     throw std::runtime_error("nothing to mesh: the fused map of " + dir + " holds no observed surface");
   return out;

@@ -10,12 +10,14 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <string>
 
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/map_dir.h"
+#include "scanstop_common/ros/msg_conversion.h"
 #include "synthetic_room.h"
 
 using namespace scanstop;
@@ -161,6 +163,33 @@ TEST(BpaMesherNode, BuildsMeshesOfTheMapAndOfFilesAndReportsErrors) {
   ASSERT_TRUE(client.call(srv));
   EXPECT_FALSE(srv.response.success);
   EXPECT_NE(srv.response.message.find(".obj"), std::string::npos) << srv.response.message;
+}
+
+// A fused mesh_method (the second test: the first wrote the map): the mesh, the fused map kept beside it
+// (fused_map.vdb) and its surface points on mesher/fused_cloud, without the ceiling (display_max_z_m).
+TEST(BpaMesherNode, AFusedMethodKeepsTheFusedMapWithTheRunAndShowsItsSurface) {
+  ros::NodeHandle nh;
+  sensor_msgs::PointCloud2 fused;
+  auto sub = nh.subscribe<sensor_msgs::PointCloud2>("fused/mesher/fused_cloud", 1, [&](const auto& m) { fused = *m; });
+  ASSERT_TRUE(ros::service::waitForService("fused/mesher/build_mesh", 30000));
+  ros::ServiceClient client = nh.serviceClient<scanstop_msgs::BuildMesh>("fused/mesher/build_mesh");
+  scanstop_msgs::BuildMesh srv;
+  srv.request.output_path = g_map_dir + "/fused_mesh.ply";
+  ASSERT_TRUE(client.call(srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_GT(srv.response.triangles, 2000u);
+  EXPECT_NE(srv.response.message.find("fused map in " + g_map_dir + "/fused_map.vdb"), std::string::npos)
+      << srv.response.message;
+  struct stat st;
+  ASSERT_EQ(::stat((g_map_dir + "/fused_map.vdb").c_str(), &st), 0) << "no fused_map.vdb beside the mesh";
+  EXPECT_GT(st.st_size, 10000);
+  ASSERT_TRUE(spinUntil([&] { return fused.width * fused.height > 1000; }, 10.0)) << "no fused surface shown";
+  EXPECT_EQ(fused.header.frame_id, "map");
+  PointCloud cloud = ros_conv::fromMsg(fused);
+  float top = -1e9f;
+  for (const auto& p : cloud.points) top = std::max(top, p.z());
+  EXPECT_LE(top, 2.0f) << "the ceiling (2.5 m) is not cut away from the view";
+  EXPECT_GT(top, 1.0f);
 }
 
 int main(int argc, char** argv) {

@@ -2,6 +2,8 @@
 // a sphere (closed, manifold, within the voxel tolerance), unseen space stays a hole, a map directory
 // meshed by either fused method.
 #include <gtest/gtest.h>
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 
 #include <algorithm>
 #include <cmath>
@@ -383,6 +385,26 @@ TEST(FusedMap, AMapDirectoryIsMeshedByEitherFusedMethod) {
     EXPECT_LT(off, m.mesh.vertices.size() / 200) << method;
     EXPECT_EQ(m.surface_points > 0, method == "fused_bpa") << method;
   }
+  // The fused map kept with the run (bpa_mesher_node: fused_map.vdb beside the mesh): both grids in an
+  // OpenVDB file, and its surface points for the display; a path that cannot be written is said, and
+  // the mesh stands.
+  const FusedMesh saved = meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig(), nullptr,
+                                                tmp.path + "/fused_map.vdb");
+  EXPECT_EQ(saved.save_problem, "");
+  EXPECT_GT(saved.surface.size(), 10000u);
+  {
+    openvdb::initialize();
+    openvdb::io::File file(tmp.path + "/fused_map.vdb");
+    file.open();
+    EXPECT_TRUE(file.hasGrid("tsdf"));
+    EXPECT_TRUE(file.hasGrid("weight"));
+    file.close();
+  }
+  const FusedMesh unsaved = meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig(), nullptr,
+                                                  tmp.path + "/no_such_dir/fused_map.vdb");
+  EXPECT_NE(unsaved.save_problem.find(tmp.path + "/no_such_dir/fused_map.vdb"), std::string::npos)
+      << unsaved.save_problem;
+  EXPECT_GT(unsaved.mesh.faces.size(), 50000u);
   EXPECT_FALSE(isFusedMeshMethod("bpa"));
   EXPECT_THROW(meshFusedMapDirectory(tmp.path + "/map", config, "bpa", MesherConfig()), std::invalid_argument);
   EXPECT_THROW(meshFusedMapDirectory(tmp.path + "/missing", config, "marching_cubes", MesherConfig()), IoError);

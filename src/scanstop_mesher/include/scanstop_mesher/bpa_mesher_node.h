@@ -51,6 +51,8 @@ struct MesherNodeConfig {
   std::string mesh_method = "bpa";
   double fused_voxel_m = 0.02;  ///< voxel of the fused map [m], [0.005, 0.5]
   double fused_carve_m = 0.2;   ///< free space carved before each hit along its beam [m], [0, 1000]
+  /// Where a fused mesh_method writes the fused map (OpenVDB .vdb); "": fused_map.vdb beside the mesh.
+  std::string fused_map_output;
   void validate() const;
   /// output_dir, or the directory it defaults to ("" when there is none).
   std::string allowedOutputDir() const;
@@ -88,7 +90,7 @@ class BpaMesherNode {
   MesherNodeConfig config_;
   MeshColoring coloring_ = MeshColoring::kHeight;
   ros::ServiceServer build_srv_;
-  ros::Publisher marker_pub_, cloud_pub_, path_pub_, poses_pub_;
+  ros::Publisher marker_pub_, cloud_pub_, path_pub_, poses_pub_, fused_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   ros::WallTimer map_timer_;
   std::string published_poses_;

@@ -139,21 +139,25 @@ size_t integrateMapDirectory(FusedMap& map, const std::string& dir, std::vector<
 /// A mesh of a map directory made through its fused map (bpa_mesher_node's `mesh_method`).
 struct FusedMesh {
   TriangleMesh mesh;
-  size_t scans = 0;           ///< scans integrated
-  size_t surface_points = 0;  ///< fused surface points meshed ("fused_bpa")
-  size_t voxels = 0;          ///< active voxels of the fused map
-  size_t memory_bytes = 0;    ///< of its grids
+  size_t scans = 0;                      ///< scans integrated
+  size_t surface_points = 0;             ///< fused surface points meshed ("fused_bpa")
+  std::vector<Eigen::Vector3f> surface;  ///< the fused map's surface points (for display) [m]
+  std::string save_problem;              ///< why save_path could not be written ("" when it was, or none given)
+  size_t voxels = 0;                     ///< active voxels of the fused map
+  size_t memory_bytes = 0;               ///< of its grids
   double integrate_s = 0.0, mesh_s = 0.0;
 };
 /// The methods meshFusedMapDirectory takes: "marching_cubes" (FusedMap::extractMesh) and
 /// "fused_bpa" (Ball Pivoting of FusedMap::surfacePoints with their normals).
 bool isFusedMeshMethod(const std::string& method);
 /// Integrates every scan of the map directory (integrateMapDirectory, same errors) and meshes the
-/// fused map by `method` (`bpa`: the Ball Pivoting settings of "fused_bpa"). Throws
-/// std::invalid_argument for another method and std::runtime_error when the fused map holds no
-/// observed surface.
+/// fused map by `method` (`bpa`: the Ball Pivoting settings of "fused_bpa"); with `save_path`, the
+/// fused map is written there too (FusedMap::save, .vdb; a failure is said in save_problem, the mesh
+/// stands). Throws std::invalid_argument for another method and std::runtime_error when the fused map
+/// holds no observed surface.
 FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
-                                const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr);
+                                const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr,
+                                const std::string& save_path = "");
 
 }  // namespace mesher
 }  // namespace scanstop
