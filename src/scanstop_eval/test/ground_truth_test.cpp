@@ -4,12 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
 
+#include "scanstop_common/cli_test.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_eval/ground_truth.h"
 #include "scanstop_explorer/floor_map.h"
@@ -150,10 +150,8 @@ TEST(GroundTruthCoverage, ARoomSeenWithoutTheCorridorBehindItsDoorIsNotFullyCove
   EXPECT_THROW(groundTruthCoverage(world, Pose2D(0.2, -0.05, 0), room_only, mg, start, 0.3), std::invalid_argument);
   EXPECT_THROW(groundTruthCoverage(world, start, cv::Mat::zeros(3, 3, CV_8U), mg, start, 0.3), std::invalid_argument);
   // A map directory without scans (mission_node and floor_coverage read maps through this).
-  char pattern[] = "/tmp/ground_truth_test_XXXXXX";
-  ASSERT_NE(mkdtemp(pattern), nullptr);
-  EXPECT_THROW(groundTruthCoverageOfMap(world, start, scanstop::MapDirectory(pattern), 0.3), std::invalid_argument);
-  EXPECT_EQ(std::system((std::string("rm -rf ") + pattern).c_str()), 0);
+  const scanstop::test_util::TempDir empty("ground_truth_test");
+  EXPECT_THROW(groundTruthCoverageOfMap(world, start, scanstop::MapDirectory(empty.path), 0.3), std::invalid_argument);
 }
 
 TEST(GroundTruthCoverage, TheReachableFloorIsTheOneCoverageIsMeasuredOn) {
@@ -190,10 +188,10 @@ TEST(GroundTruthCoverage, OfAMapDirectoryUsesTheExplorerConfigurationGiven) {
   // parameters (config/explorer.yaml), not the defaults.
   const scanstop::TriangleMesh world = roomAndCorridor();
   const Pose2D start(2.0, 2.0, 0.0);
-  char pattern[] = "/tmp/ground_truth_cfg_test_XXXXXX";
-  ASSERT_NE(mkdtemp(pattern), nullptr);
+  const scanstop::test_util::TempDir tmp("ground_truth_cfg_test");
+  const std::string dir_path = tmp.path;
   {
-    scanstop::MapDirectory dir(pattern);
+    scanstop::MapDirectory dir(dir_path);
     scanstop::PointCloud scan;
     for (int i = 0; i < 360; ++i)
       scan.points.emplace_back(1.5f * std::cos(i * 0.01745f), 1.5f * std::sin(i * 0.01745f), 0.0f);
@@ -202,7 +200,7 @@ TEST(GroundTruthCoverage, OfAMapDirectoryUsesTheExplorerConfigurationGiven) {
     info.sensor_origin = Eigen::Vector3d(0, 0, 0.45);
     dir.append(info, scan);
   }
-  const scanstop::MapDirectory map(pattern);
+  const scanstop::MapDirectory map(dir_path);
   ExplorerConfig small, large;
   large.known_free_radius_m = 1.4;
   const GroundTruthCoverage a = groundTruthCoverageOfMap(world, start, map, 0.3);
@@ -213,5 +211,4 @@ TEST(GroundTruthCoverage, OfAMapDirectoryUsesTheExplorerConfigurationGiven) {
   // The 1.4 m disc instead of 0.8 m: about pi (1.4^2 - 0.8^2) = 4.1 m2 more floor seen.
   EXPECT_GT(c.observed_m2, a.observed_m2 + 3.0) << a.observed_m2 << " vs " << c.observed_m2;
   EXPECT_NEAR(a.reachable_m2, c.reachable_m2, 1e-9);
-  EXPECT_EQ(std::system((std::string("rm -rf ") + pattern).c_str()), 0);
 }
