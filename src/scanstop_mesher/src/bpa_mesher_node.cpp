@@ -52,6 +52,7 @@ void MesherNodeConfig::validate() const {
   requireOneOf("mesh_method", mesh_method, {"bpa", "marching_cubes", "fused_bpa"});
   requireInRange("fused_voxel_m", fused_voxel_m, 0.005, 0.5, "m");
   requireInRange("fused_carve_m", fused_carve_m, 0.0, 1000.0, "m");
+  requireInRange("fused_max_grid_mb", fused_max_grid_mb, 1.0, 1e6, "MB");
   if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
   if (require_map && map_dir.empty()) throw ConfigError("parameter 'require_map' is true but 'map_dir' is empty");
   if (!default_output.empty()) {
@@ -99,6 +100,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   params.optional("mesh_method", c.mesh_method);
   params.optional("fused_voxel_m", c.fused_voxel_m);
   params.optional("fused_carve_m", c.fused_carve_m);
+  params.optional("fused_max_grid_mb", c.fused_max_grid_mb);
   params.optional("fused_map_output", c.fused_map_output);
   params.rejectUnknown();
   c.validate();
@@ -189,9 +191,18 @@ bool BpaMesherNode::onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop
 
 void BpaMesherNode::buildAndPublish(const scanstop_msgs::BuildMesh::Request& req, const MesherConfig& mc,
                                     const std::string& output, scanstop_msgs::BuildMesh::Response& res) {
+  std::string fallback;  // why a fused mesh_method became Ball Pivoting of the points
   if (req.input_path.empty() && isFusedMeshMethod(config_.mesh_method)) {
-    buildFusedAndPublish(mc, output, res);
-    return;
+    try {
+      buildFusedAndPublish(mc, output, res);
+      return;
+    } catch (const GridBoundError& e) {
+      fallback = std::string("the fused map needs more than fused_max_grid_mb = ") +
+                 std::to_string(static_cast<long>(config_.fused_max_grid_mb)) +
+                 " MB: meshed by Ball Pivoting of the map's points instead (" + e.what() + ")";
+      ROS_WARN("bpa_mesher_node: %s", fallback.c_str());
+      malloc_trim(0);  // the grids built so far are gone
+    }
   }
   ScanPoints points;
   std::string source;
@@ -213,6 +224,7 @@ void BpaMesherNode::buildAndPublish(const scanstop_msgs::BuildMesh::Request& req
   for (double x : r.radii_m) msg << " " << x;
   msg << " m; " << r.topology.nonmanifold_edges << " non-manifold edges, " << r.topology.nonmanifold_vertices
       << " non-manifold vertices)";
+  if (!fallback.empty()) skipped.push_back(fallback);
   finishMesh(r.mesh, output, r.points, msg.str(), skipped, res);
 }
 
@@ -236,6 +248,7 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   fc.voxel_m = config_.fused_voxel_m;
   fc.truncation_m = 3.0 * config_.fused_voxel_m;
   fc.carve_m = config_.fused_carve_m;
+  fc.max_grid_mb = config_.fused_max_grid_mb;
   std::vector<std::string> skipped;
   // The fused map is kept with the run: beside the mesh unless fused_map_output says where.
   const std::string vdb = !config_.fused_map_output.empty()

@@ -167,7 +167,7 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
           << " leaf nodes of 8^3 voxels) after " << used << " of scan " << stats_.scans + 1 << "'s " << points.size()
           << " readings: voxel_m = " << config_.voxel_m
           << " m is too fine for the mapped space; use a larger voxel (default 0.02 m) or raise max_grid_mb";
-        throw ConfigError(o.str());
+        throw GridBoundError(o.str());
       }
       const float D = w > 0.0f ? tsdf.getValue(c) : 0.0f;
       tsdf.setValue(c, (D * w + value) / (w + 1.0f));

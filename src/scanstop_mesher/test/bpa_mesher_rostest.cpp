@@ -198,6 +198,29 @@ TEST(BpaMesherNode, AFusedMethodKeepsTheFusedMapWithTheRunAndShowsItsSurface) {
   EXPECT_GT(top, 1.0f);
 }
 
+// A map whose fused grids would pass fused_max_grid_mb is meshed by Ball Pivoting of its points: a
+// mesh, the reason in the response, no fused map file.
+TEST(BpaMesherNode, AMapTooLargeForTheFusedGridsIsMeshedByBallPivoting) {
+  ros::NodeHandle nh;
+  struct stat map_st;
+  if (::stat((g_map_dir + "/poses.csv").c_str(), &map_st) != 0) {
+    ::mkdir(g_map_dir.c_str(), 0755);
+    writeMap(g_map_dir);
+  }
+  ASSERT_TRUE(ros::service::waitForService("bounded/mesher/build_mesh", 30000));
+  ros::ServiceClient client = nh.serviceClient<scanstop_msgs::BuildMesh>("bounded/mesher/build_mesh");
+  scanstop_msgs::BuildMesh srv;
+  srv.request.output_path = g_map_dir + "/bounded_mesh.ply";
+  ASSERT_TRUE(client.call(srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_GT(srv.response.triangles, 2000u);
+  EXPECT_NE(srv.response.message.find("fused_max_grid_mb = 1 MB: meshed by Ball Pivoting"), std::string::npos)
+      << srv.response.message;
+  struct stat st;
+  EXPECT_EQ(::stat((g_map_dir + "/bounded_mesh.ply").c_str(), &st), 0) << "no mesh";
+  EXPECT_NE(::stat((g_map_dir + "/bounded.vdb").c_str(), &st), 0) << "a fused map file of a fused map that was not built";
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "bpa_mesher_rostest");

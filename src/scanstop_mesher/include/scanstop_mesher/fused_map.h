@@ -22,10 +22,18 @@
 #include <vector>
 
 #include "scanstop_common/cloud.h"
+#include "scanstop_common/error.h"
 #include "scanstop_mesher/mesher.h"
 
 namespace scanstop {
 namespace mesher {
+
+/// The fused map's grids would pass FusedMapConfig::max_grid_mb (a ConfigError: the voxel is too
+/// fine for the mapped space, or the bound too small for it).
+class GridBoundError : public ConfigError {
+ public:
+  using ConfigError::ConfigError;
+};
 
 /// Settings of the fused map.
 struct FusedMapConfig {
@@ -52,7 +60,7 @@ struct FusedMapConfig {
   double min_weight = 2.0;
   /// Cap of the weight (the running average then becomes a moving one that can still change), [1, 1e6].
   double max_weight = 10000.0;
-  /// Bound on the memory of the grids [MB], [1, 1e6]: integrate() throws ConfigError once the leaf
+  /// Bound on the memory of the grids [MB], [1, 1e6]: integrate() throws GridBoundError once the leaf
   /// nodes it allocated (8^3 voxels each, in both grids; the internal nodes add up to a quarter more
   /// at a voxel far too fine, 25 MB at a 20 MB bound measured) would pass it: a voxel too fine for the mapped
   /// space (--voxel 0.001 on a room wanted 9 GB and more) ends at once instead of filling memory.
