@@ -199,7 +199,8 @@ void BpaMesherNode::buildAndPublish(const scanstop_msgs::BuildMesh::Request& req
     } catch (const GridBoundError& e) {
       fallback = std::string("the fused map needs more than fused_max_grid_mb = ") +
                  std::to_string(static_cast<long>(config_.fused_max_grid_mb)) +
-                 " MB: meshed by Ball Pivoting of the map's points instead (" + e.what() + ")";
+                 " MB even at 4 times fused_voxel_m: meshed by Ball Pivoting of the map's points instead (" + e.what() +
+                 ")";
       ROS_WARN("bpa_mesher_node: %s", fallback.c_str());
       malloc_trim(0);  // the grids built so far are gone
     }
@@ -245,8 +246,6 @@ void BpaMesherNode::finishMesh(const TriangleMesh& mesh, const std::string& outp
 void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::string& output,
                                          scanstop_msgs::BuildMesh::Response& res) {
   FusedMapConfig fc;
-  fc.voxel_m = config_.fused_voxel_m;
-  fc.truncation_m = 3.0 * config_.fused_voxel_m;
   fc.carve_m = config_.fused_carve_m;
   fc.max_grid_mb = config_.fused_max_grid_mb;
   std::vector<std::string> skipped;
@@ -254,8 +253,36 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   const std::string vdb = !config_.fused_map_output.empty()
                               ? config_.fused_map_output
                               : output.substr(0, output.find_last_of('/') + 1) + "fused_map.vdb";
-  const FusedMesh r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped, vdb);
+  // A map too large for the grids at fused_voxel_m is fused with coarser voxels (the grids' memory
+  // falls with about the square of the voxel: a band of voxels around every surface), up to 4 times
+  // fused_voxel_m; beyond that GridBoundError goes to the caller (Ball Pivoting).
+  FusedMesh r;
+  for (double voxel = config_.fused_voxel_m;; voxel *= 1.5) {
+    fc.voxel_m = voxel;
+    fc.truncation_m = 3.0 * voxel;
+    skipped.clear();
+    try {
+      r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped, vdb);
+      break;
+    } catch (const GridBoundError& e) {
+      if (voxel * 1.5 > 4.0 * config_.fused_voxel_m + 1e-9) throw;
+      ROS_WARN(
+          "bpa_mesher_node: the fused map at a %.3f m voxel needs more than fused_max_grid_mb = %.0f MB: fusing "
+          "again at %.3f m",
+          voxel, config_.fused_max_grid_mb, voxel * 1.5);
+      malloc_trim(0);
+    }
+  }
+  std::string coarser;
+  if (fc.voxel_m != config_.fused_voxel_m) {
+    std::ostringstream why;
+    why << "fused at a " << fc.voxel_m << " m voxel: at " << config_.fused_voxel_m
+        << " m (fused_voxel_m) the grids needed more than fused_max_grid_mb = " << config_.fused_max_grid_mb << " MB";
+    ROS_WARN("bpa_mesher_node: %s", why.str().c_str());
+    coarser = why.str();
+  }
   for (const std::string& s : skipped) ROS_ERROR("bpa_mesher_node: %s", s.c_str());
+  if (!coarser.empty()) skipped.push_back(coarser);
   if (!r.save_problem.empty()) {
     ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", r.save_problem.c_str());
     skipped.push_back("the fused map was not saved: " + r.save_problem);

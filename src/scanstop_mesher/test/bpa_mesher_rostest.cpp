@@ -198,9 +198,9 @@ TEST(BpaMesherNode, AFusedMethodKeepsTheFusedMapWithTheRunAndShowsItsSurface) {
   EXPECT_GT(top, 1.0f);
 }
 
-// A map whose fused grids would pass fused_max_grid_mb is meshed by Ball Pivoting of its points: a
-// mesh, the reason in the response, no fused map file.
-TEST(BpaMesherNode, AMapTooLargeForTheFusedGridsIsMeshedByBallPivoting) {
+// A map whose fused grids would pass fused_max_grid_mb even at 4 times the voxel is meshed by Ball Pivoting of its
+// points: a mesh, the reason in the response, no fused map file.
+TEST(BpaMesherNode, AMapTooLargeForTheFusedGridsIsFusedCoarserOrMeshedByBallPivoting) {
   ros::NodeHandle nh;
   struct stat map_st;
   if (::stat((g_map_dir + "/poses.csv").c_str(), &map_st) != 0) {
@@ -214,11 +214,28 @@ TEST(BpaMesherNode, AMapTooLargeForTheFusedGridsIsMeshedByBallPivoting) {
   ASSERT_TRUE(client.call(srv));
   ASSERT_TRUE(srv.response.success) << srv.response.message;
   EXPECT_GT(srv.response.triangles, 2000u);
-  EXPECT_NE(srv.response.message.find("fused_max_grid_mb = 1 MB: meshed by Ball Pivoting"), std::string::npos)
+  EXPECT_NE(
+      srv.response.message.find("fused_max_grid_mb = 1 MB even at 4 times fused_voxel_m: meshed by Ball Pivoting"),
+      std::string::npos)
       << srv.response.message;
   struct stat st;
   EXPECT_EQ(::stat((g_map_dir + "/bounded_mesh.ply").c_str(), &st), 0) << "no mesh";
-  EXPECT_NE(::stat((g_map_dir + "/bounded.vdb").c_str(), &st), 0) << "a fused map file of a fused map that was not built";
+  EXPECT_NE(::stat((g_map_dir + "/bounded.vdb").c_str(), &st), 0)
+      << "a fused map file of a fused map that was not built";
+
+  // A bound the map fits at a coarser voxel: fused and meshed there, and the response says so.
+  ASSERT_TRUE(ros::service::waitForService("coarser/mesher/build_mesh", 30000));
+  client = nh.serviceClient<scanstop_msgs::BuildMesh>("coarser/mesher/build_mesh");
+  srv.request.output_path = g_map_dir + "/coarser_mesh.ply";
+  ASSERT_TRUE(client.call(srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_GT(srv.response.triangles, 1000u);
+  EXPECT_NE(srv.response.message.find("by marching_cubes of the fused map"), std::string::npos) << srv.response.message;
+  EXPECT_NE(
+      srv.response.message.find("m voxel: at 0.02 m (fused_voxel_m) the grids needed more than fused_max_grid_mb"),
+      std::string::npos)
+      << srv.response.message;
+  EXPECT_EQ(::stat((g_map_dir + "/coarser.vdb").c_str(), &st), 0) << "no fused map beside the mesh";
 }
 
 int main(int argc, char** argv) {

@@ -53,8 +53,9 @@ struct MesherNodeConfig {
   std::string mesh_method = "marching_cubes";
   double fused_voxel_m = 0.02;  ///< voxel of the fused map [m], [0.005, 0.5]
   double fused_carve_m = 0.2;   ///< free space carved before each hit along its beam [m], [0, 1000]
-  /// Bound on the fused map's grids [MB], [1, 1e6]: a map whose fused grids would need more is meshed
-  /// by Ball Pivoting of its points instead (a WARN and the response's message say so).
+  /// Bound on the fused map's grids [MB], [1, 1e6]: a map whose fused grids would need more is fused
+  /// again at 1.5 times the voxel, up to 4 times fused_voxel_m, and beyond that meshed by Ball
+  /// Pivoting of its points (a WARN and the response's message say which).
   double fused_max_grid_mb = 1000.0;
   /// Where a fused mesh_method writes the fused map (OpenVDB .vdb); "": fused_map.vdb beside the mesh.
   std::string fused_map_output;
