@@ -10,7 +10,8 @@
 # the reachable floor, no collisions, final SLAM error <= 3 cm), and says whether it passes.
 # It prints the surface the map holds (summary.json surface_coverage: the share of the surface visible
 # from the reachable floor that lies within 3 cm of a map point) and the modelled mission time split
-# into scanning, driving and compute.
+# into scanning, driving and compute, and the mesh's distance to the world's true surfaces (median, RMS,
+# 95th percentile) with the share of the visible surface it covers within 3 cm (unless mesh:=false).
 # Next to every run's scans it prints the known-map reference of its world (coverage_oracle,
 # scanstop_eval: the fewest perfect scans that see 99 % of the reachable floor, from the same start)
 # and the ratio scans / reference; the reference is computed once per world and start and kept in
@@ -89,8 +90,8 @@ done
 /usr/bin/python3 - "$out" "${worlds[@]}" <<'PY'
 import json, os, sys
 out, entries = sys.argv[1], sys.argv[2:]
-print("\n| run | state | scans | reference (99 % floor) | scans / reference | coverage (true) | surface held (true) | modelled time: scanning + driving + compute | collisions | min clearance (legs < 5 cm) | ATE RMS / max (scan) | final SLAM error | odometry ATE RMS / final | compute/cycle mean (max) | scan time | mission wall time |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("\n| run | state | scans | reference (99 % floor) | scans / reference | coverage (true) | surface held (true) | modelled time: scanning + driving + compute | collisions | min clearance (legs < 5 cm) | ATE RMS / max (scan) | final SLAM error | odometry ATE RMS / final | compute/cycle mean (max) | scan time | mission wall time | mesh: triangles, median / RMS / p95, covered |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 verdicts = []
 for e in entries:
     name = e.replace(":=", "=")
@@ -109,13 +110,16 @@ for e in entries:
     clear = "-" if s.get("min_clearance_m") is None else "%s (%d of %d)" % (
         err("min_clearance_m"), s["legs_closer_than_5cm"], s["legs_measured"])
     surface = "-" if s.get("surface_coverage") is None else "%.1f %%" % (100 * s["surface_coverage"])
+    mesh = "-" if s.get("mesh_distance_median_m") is None else "%.2f M, %.1f / %.1f / %.1f mm, %.1f %%" % (
+        s["mesh_triangles"] / 1e6, 1e3 * s["mesh_distance_median_m"], 1e3 * s["mesh_distance_rms_m"],
+        1e3 * s["mesh_distance_p95_m"], 100 * s["mesh_surface_coverage"])
     minutes = lambda k: "-" if s.get(k) is None else "%.1f" % (s[k] / 60.0)
     time_split = "%s min: %s + %s + %s" % (minutes("modelled_time_s"), minutes("modelled_scanning_s"),
                                             minutes("modelled_driving_s"), minutes("modelled_compute_s"))
-    print("| %s | %s | %d | %s | %s | %.1f %% (%s) | %s | %s | %d | %s | %s | %s | %s / %s | %.2f s (%.2f s) | %.0f s | %.0f s |" % (
+    print("| %s | %s | %d | %s | %s | %.1f %% (%s) | %s | %s | %d | %s | %s | %s | %s / %s | %.2f s (%.2f s) | %.0f s | %.0f s | %s |" % (
         e, s["state"], s["scans"], "-" if ref is None else ref, ratio, 100 * s["coverage"], "-" if true_cov is None else "%.1f %%" % (100 * true_cov),
         surface, time_split, s["collisions"], clear, ate, err("final_slam_error_m"), err("odometry_ate_rms_m"), err("final_odometry_error_m"),
-        s["compute_per_cycle_mean_s"], s["compute_per_cycle_max_s"], s["scan_time_mean_s"], s["elapsed_s"]))
+        s["compute_per_cycle_mean_s"], s["compute_per_cycle_max_s"], s["scan_time_mean_s"], s["elapsed_s"], mesh))
     if e == "room_10x8+min_scan_travel:=2.0":
         checks = [("DONE", s["state"] == "DONE"), ("<= 21 scans", s["scans"] <= 21),
                   (">= 95 % of the reachable floor", (true_cov or 0.0) >= 0.95), ("no collisions", s["collisions"] == 0),

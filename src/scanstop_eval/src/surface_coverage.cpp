@@ -1,6 +1,7 @@
 #include "scanstop_eval/surface_coverage.h"
 
 #include <exception>
+#include <utility>
 
 #include "scanstop_common/config.h"
 
@@ -65,12 +66,11 @@ RunSurfaceCoverage surfaceCoverageOfRun(const TriangleMesh& world, const std::st
   OracleConfig oracle;
   oracle.planes = planes;
   oracle.robot_radius_m = robot_radius_m;
-  const VisibleSurface visible = visibleSurface(sim, start, oracle);
-  RunSurfaceCoverage out;
-  out.held = mapSurfaceCoverage(visible, map, start, oracle.surface_tolerance_m);
-  out.candidates = visible.candidates;
-  out.seconds = visible.seconds;
-  return out;
+  VisibleSurface visible = visibleSurface(sim, start, oracle);
+  const MapSurfaceCoverage held = mapSurfaceCoverage(visible, map, start, oracle.surface_tolerance_m);
+  const size_t candidates = visible.candidates;
+  const double seconds = visible.seconds;
+  return RunSurfaceCoverage{held, candidates, seconds, std::move(visible)};
 }
 
 }  // namespace eval

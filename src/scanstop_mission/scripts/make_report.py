@@ -387,6 +387,11 @@ def write_html(run, out_dir, images):
             fmt(s.get("modelled_compute_s"), 1 / 60.0, 1, " min"))))
     if s.get("surface_coverage") is not None:
         rows.insert(5, ("surface held by the map (world)", fmt(s.get("surface_coverage"), 100.0, 1, " %")))
+    if s.get("mesh_distance_median_m") is not None:
+        rows.append(("mesh against the world: median / RMS / p95; covered", "%s / %s / %s; %s (%s triangles)" % (
+            fmt(s.get("mesh_distance_median_m"), 1000.0, 1, " mm"), fmt(s.get("mesh_distance_rms_m"), 1000.0, 1, " mm"),
+            fmt(s.get("mesh_distance_p95_m"), 1000.0, 1, " mm"), fmt(s.get("mesh_surface_coverage"), 100.0, 1, " %"),
+            html.escape(str(s.get("mesh_triangles"))))))
     err = pose_errors(run)
     if err:
         rms = math.sqrt(sum(e[1] ** 2 for e in err) / len(err))

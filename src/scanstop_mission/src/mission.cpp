@@ -1029,9 +1029,10 @@ State Mission::endMission(const Cycle& cycle) {
     }
     if (!mesh.available)
       info_("no mesher is running; skipping the mesh");
-    else if (mesh.success)
+    else if (mesh.success) {
+      built_mesh_ = mesh.file;
       event("mesh with " + std::to_string(mesh.triangles) + " triangles written to " + mesh.file);
-    else
+    } else
       event("meshing failed: " + mesh.message, true);
   }
   if (!cycle.safety_stop.empty()) return finish(State::Failed, cycle.safety_stop);

@@ -19,6 +19,7 @@
 #include "scanstop_common/ros/robot_body.h"
 #include "scanstop_common/stl_io.h"
 #include "scanstop_eval/ground_truth.h"
+#include "scanstop_eval/surface_accuracy.h"
 #include "scanstop_eval/surface_coverage.h"
 #include "scanstop_mission/report.h"
 #include "scanstop_mission/run_directory.h"
@@ -273,7 +274,7 @@ void MissionNode::onStaticTf(const tf2_msgs::TFMessage::ConstPtr& msg) {
     }
 }
 
-std::optional<TrueCoverage> MissionNode::trueCoverage() {
+std::optional<TrueCoverage> MissionNode::trueCoverage(const std::string& mesh_file) {
   if (world_file_.empty()) return std::nullopt;
   std::optional<Pose2D> start;
   {
@@ -296,8 +297,8 @@ std::optional<TrueCoverage> MissionNode::trueCoverage() {
         robot_radius_given_ ? std::optional<double>(robot_radius_m_) : std::nullopt, &note);
     if (!note.empty()) ROS_WARN("mission: true coverage: %s", note.c_str());
     const double robot_radius = c.robot_radius_m;
-    TrueCoverage truth{c.coverage, c.reachable_m2, std::nullopt, 0};
-    if (surface_planes_ > 0) surfaceCoverage(world, *start, map, robot_radius, truth);
+    TrueCoverage truth{c.coverage, c.reachable_m2, std::nullopt, 0, std::nullopt};
+    if (surface_planes_ > 0) surfaceCoverage(world, *start, map, robot_radius, mesh_file, truth);
     return truth;
   } catch (const std::exception& e) {
     ROS_WARN("mission: no true coverage (%s: %s)", world_file_.c_str(), e.what());
@@ -306,7 +307,7 @@ std::optional<TrueCoverage> MissionNode::trueCoverage() {
 }
 
 void MissionNode::surfaceCoverage(const TriangleMesh& world, const Pose2D& start, const MapDirectory& map,
-                                  double robot_radius, TrueCoverage& truth) {
+                                  double robot_radius, const std::string& mesh_file, TrueCoverage& truth) {
   // The surface visible from the truly reachable floor: the coverage oracle's candidate scans
   // (perfect, surface_planes planes, every 0.5 m), then the map's points within 3 cm of it.
   try {
@@ -319,6 +320,23 @@ void MissionNode::surfaceCoverage(const TriangleMesh& world, const Pose2D& start
         "mission: the map holds %.1f %% of the %zu surface elements visible from the reachable floor "
         "(%zu candidate scans of %d planes, %.1f s)",
         held.share * 100.0, held.visible, run.candidates, surface_planes_, run.seconds);
+    if (mesh_file.empty()) return;
+    try {
+      const auto t0 = std::chrono::steady_clock::now();
+      const eval::AccuracyInput mesh = eval::loadAccuracyInput(mesh_file);
+      const eval::WorldSurfaceDistance distance(world);
+      const eval::SurfaceAccuracy a = eval::measureSurfaceAccuracy(distance, &run.visible, mesh, start);
+      truth.mesh = MeshAccuracy{a.surface_distance.median_m, a.surface_distance.rms_m, a.surface_distance.p95_m,
+                                a.coverage, a.triangles};
+      ROS_INFO(
+          "mission: the mesh (%zu triangles) lies %.1f / %.1f / %.1f mm (median / RMS / 95th percentile) from the "
+          "true surfaces and covers %.1f %% of the visible surface within 3 cm (%.1f s)",
+          a.triangles, a.surface_distance.median_m * 1e3, a.surface_distance.rms_m * 1e3,
+          a.surface_distance.p95_m * 1e3, a.coverage * 100.0,
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    } catch (const std::exception& e) {
+      ROS_WARN("mission: the mesh %s was not measured against the world: %s", mesh_file.c_str(), e.what());
+    }
   } catch (const std::exception& e) {
     ROS_WARN("mission: no surface coverage (%s: %s)", world_file_.c_str(), e.what());
   }
@@ -328,7 +346,7 @@ void MissionNode::runMission() {
   const State end = mission_->run();
   const MissionState state = mission_->snapshot();
   try {
-    const std::optional<TrueCoverage> truth = trueCoverage();
+    const std::optional<TrueCoverage> truth = trueCoverage(mission_->builtMesh());
     const std::string report =
         writeReport(state, config_.run_dir, listImages(config_.run_dir, "explorer"), truth, html_report_);
     const Summary s = summarize(state);

@@ -166,6 +166,11 @@ std::string toJson(const Summary& s) {
       << "  \"surface_coverage\": " << (s.has_surface_coverage ? num(s.surface_coverage) : "null") << ",\n"
       << "  \"surface_visible_elements\": " << (s.has_surface_coverage ? std::to_string(s.surface_visible) : "null")
       << ",\n"
+      << "  \"mesh_triangles\": " << (s.has_mesh_accuracy ? std::to_string(s.mesh.triangles) : "null") << ",\n"
+      << "  \"mesh_distance_median_m\": " << (s.has_mesh_accuracy ? num(s.mesh.median_m, 5) : "null") << ",\n"
+      << "  \"mesh_distance_rms_m\": " << (s.has_mesh_accuracy ? num(s.mesh.rms_m, 5) : "null") << ",\n"
+      << "  \"mesh_distance_p95_m\": " << (s.has_mesh_accuracy ? num(s.mesh.p95_m, 5) : "null") << ",\n"
+      << "  \"mesh_surface_coverage\": " << (s.has_mesh_accuracy ? num(s.mesh.surface_coverage) : "null") << ",\n"
       << "  \"collisions\": " << s.collisions << ",\n"
       << "  \"min_clearance_m\": " << (s.has_clearance ? num(s.min_clearance_m) : "null") << ",\n"
       << "  \"legs_measured\": " << (s.has_clearance ? std::to_string(s.clearance_legs) : "null") << ",\n"
@@ -239,6 +244,8 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
     s.has_surface_coverage = truth->surface_coverage.has_value();
     s.surface_coverage = truth->surface_coverage.value_or(0.0);
     s.surface_visible = truth->surface_visible;
+    s.has_mesh_accuracy = truth->mesh.has_value();
+    if (truth->mesh) s.mesh = *truth->mesh;
   }
   writeFileAtomic(run_dir + "/summary.json", toJson(s));
   writeFileAtomic(run_dir + "/trajectory.csv", trajectoryCsv(st));
@@ -343,6 +350,11 @@ std::string writeReport(const MissionState& st, const std::string& run_dir, cons
   if (s.has_surface_coverage)
     md << "| surface held by the map within 3 cm (of " << s.surface_visible
        << " 5 cm elements visible from the reachable floor) | " << num(s.surface_coverage * 100.0, 1) << " % |\n";
+  if (s.has_mesh_accuracy)
+    md << "| the mesh (" << s.mesh.triangles << " triangles) against the true surfaces: median / RMS / 95th percentile "
+       << "distance; the visible surface it covers within 3 cm | " << num(s.mesh.median_m * 1000.0, 1) << " / "
+       << num(s.mesh.rms_m * 1000.0, 1) << " / " << num(s.mesh.p95_m * 1000.0, 1) << " mm; "
+       << num(s.mesh.surface_coverage * 100.0, 1) << " % |\n";
   md << "| collisions | " << s.collisions << " |\n"
      << (s.has_clearance ? "| smallest true clearance of the body (all motions) | " +
                                num(s.min_clearance_m * 100.0, 1) + " cm; " + std::to_string(s.close_legs) + " of " +

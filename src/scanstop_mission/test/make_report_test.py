@@ -47,7 +47,12 @@ def make_run(root, truth=True, summary=True, floor=True, mission_times=False):
             json.dump({"world": "synthetic", "state": "DONE", "scans": 4, "coverage": 0.9,
                        "true_coverage": 0.85 if truth else None, "collisions": 0, "modelled_time_s": 420.0,
                        "modelled_scanning_s": 160.0, "modelled_driving_s": 240.0, "modelled_compute_s": 20.0,
-                       "surface_coverage": 0.913 if truth else None}, f)
+                       "surface_coverage": 0.913 if truth else None,
+                       "mesh_triangles": 3404278 if truth else None,
+                       "mesh_distance_median_m": 0.0029 if truth else None,
+                       "mesh_distance_rms_m": 0.0076 if truth else None,
+                       "mesh_distance_p95_m": 0.0173 if truth else None,
+                       "mesh_surface_coverage": 0.923 if truth else None}, f)
     if floor:
         import matplotlib
         matplotlib.use("Agg")
@@ -106,6 +111,7 @@ class MakeReport(unittest.TestCase):
         self.assertIn("85.0 %", page)  # the true coverage
         self.assertIn("SLAM position error (4 scans)", page)
         self.assertIn("91.3 %", page)  # the surface held by the map
+        self.assertIn("2.9 mm / 7.6 mm / 17.3 mm; 92.3 % (3404278 triangles)", page)  # the mesh against the world
         self.assertIn("2.7 min / 4.0 min / 0.3 min", page)  # scanning / driving / compute
         self.assertNotIn("no explorer/floor_map.yaml", page)
         self.assertEqual([n for n in os.listdir(run) if n.startswith(".tmp_")], [])

@@ -141,7 +141,7 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   EXPECT_NE(json.find("\"true_coverage\": null"), std::string::npos) << json;
   EXPECT_EQ(text.find("truly reachable"), std::string::npos) << text;
   // In simulation the ground-truth coverage is reported next to the explorer's own figure.
-  writeReport(twoScans(), dir, {}, TrueCoverage{0.816, 96.0, 0.9234, 20299});
+  writeReport(twoScans(), dir, {}, TrueCoverage{0.816, 96.0, 0.9234, 20299, std::nullopt});
   const std::string sim_json = readFile(dir + "/summary.json");
   EXPECT_NE(sim_json.find("\"surface_coverage\": 0.9234"), std::string::npos) << sim_json;
   EXPECT_NE(sim_json.find("\"surface_visible_elements\": 20299"), std::string::npos) << sim_json;
@@ -154,6 +154,23 @@ TEST(Report, WritesSummaryPlotsAndIndex) {
   EXPECT_NE(
       readFile(dir + "/report.md").find("| coverage of the truly reachable floor (96.0 m2, from the world) | 81.6 % |"),
       std::string::npos)
+      << readFile(dir + "/report.md");
+  // No mesh measured: null; a mesh measured against the world: its figures in both.
+  EXPECT_NE(sim_json.find("\"mesh_distance_median_m\": null"), std::string::npos) << sim_json;
+  EXPECT_EQ(readFile(dir + "/report.md").find("the mesh ("), std::string::npos);
+  writeReport(twoScans(), dir, {},
+              TrueCoverage{0.816, 96.0, 0.9234, 20299, MeshAccuracy{0.0029, 0.0076, 0.0173, 0.923, 3404278}});
+  const std::string mesh_json = readFile(dir + "/summary.json");
+  EXPECT_NE(mesh_json.find("\"mesh_distance_median_m\": 0.00290"), std::string::npos) << mesh_json;
+  EXPECT_NE(mesh_json.find("\"mesh_distance_rms_m\": 0.00760"), std::string::npos) << mesh_json;
+  EXPECT_NE(mesh_json.find("\"mesh_distance_p95_m\": 0.01730"), std::string::npos) << mesh_json;
+  EXPECT_NE(mesh_json.find("\"mesh_surface_coverage\": 0.9230"), std::string::npos) << mesh_json;
+  EXPECT_NE(mesh_json.find("\"mesh_triangles\": 3404278"), std::string::npos) << mesh_json;
+  EXPECT_NE(readFile(dir + "/report.md")
+                .find("| the mesh (3404278 triangles) against the true surfaces: median / RMS / "
+                      "95th percentile distance; the visible surface it covers within 3 cm | "
+                      "2.9 / 7.6 / 17.3 mm; 92.3 % |"),
+            std::string::npos)
       << readFile(dir + "/report.md");
   EXPECT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }

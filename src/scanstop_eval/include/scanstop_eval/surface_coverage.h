@@ -60,8 +60,9 @@ MapSurfaceCoverage mapSurfaceCoverage(const VisibleSurface& visible, const MapDi
 /// start: the map frame in the world. Throws as visibleSurface and mapSurfaceCoverage.
 struct RunSurfaceCoverage {
   MapSurfaceCoverage held;
-  size_t candidates = 0;  ///< candidate scans of the visible surface
-  double seconds = 0.0;   ///< wall time of the visible surface [s]
+  size_t candidates = 0;   ///< candidate scans of the visible surface
+  double seconds = 0.0;    ///< wall time of the visible surface [s]
+  VisibleSurface visible;  ///< the visible surface itself (for the mesh's coverage, measureSurfaceAccuracy)
 };
 RunSurfaceCoverage surfaceCoverageOfRun(const TriangleMesh& world, const std::string& world_name, const Pose2D& start,
                                         const MapDirectory& map, double robot_radius_m, int planes);

@@ -175,6 +175,8 @@ class Mission {
 
   /// A copy of the current state (thread-safe).
   MissionState snapshot() const;
+  /// The mesh the mesher wrote at the end of this run (its path on the mesher's host); empty: none.
+  const std::string& builtMesh() const { return built_mesh_; }
   std::string statePath() const { return config_.run_dir + "/mission_state.yaml"; }
   std::string logPath() const { return config_.run_dir + "/mission.log"; }
 
@@ -314,6 +316,7 @@ class Mission {
   std::chrono::steady_clock::time_point started_;
   double pending_plan_wall_s_ = 0.0;
   std::function<void()> state_listener_;
+  std::string built_mesh_;  ///< builtMesh()
 };
 
 }  // namespace mission

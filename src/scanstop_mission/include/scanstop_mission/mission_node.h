@@ -49,10 +49,12 @@ class MissionNode {
   void runMission();
   void onStaticTf(const tf2_msgs::TFMessage::ConstPtr& msg);
   /// The ground-truth coverage of the final map when world_file is set (simulation), else none.
-  std::optional<TrueCoverage> trueCoverage();
-  /// Adds the surface coverage of the map to truth (simulation; a failure is a warning).
+  /// mesh_file: the mesh built at the end (empty: none), measured against the world too.
+  std::optional<TrueCoverage> trueCoverage(const std::string& mesh_file);
+  /// Adds the surface coverage of the map to truth, and the mesh's accuracy when mesh_file is set
+  /// (simulation; a failure is a warning).
   void surfaceCoverage(const TriangleMesh& world, const Pose2D& start, const MapDirectory& map, double robot_radius,
-                       TrueCoverage& truth);
+                       const std::string& mesh_file, TrueCoverage& truth);
 
   ros::NodeHandle nh_;
   MissionConfig config_;

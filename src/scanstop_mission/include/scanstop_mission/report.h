@@ -11,6 +11,13 @@ namespace scanstop {
 namespace mission {
 
 /// Figures of a finished (or stopped) mission.
+/// A mesh against the world's true surfaces (simulation).
+struct MeshAccuracy {
+  double median_m = 0.0, rms_m = 0.0, p95_m = 0.0;  ///< distance of its surface to the world [m]
+  double surface_coverage = 0.0;                    ///< share of the visible surface within 3 cm of it [0..1]
+  size_t triangles = 0;
+};
+
 struct Summary {
   std::string world;
   std::string state;
@@ -61,6 +68,11 @@ struct Summary {
   bool has_surface_coverage = false;
   double surface_coverage = 0.0;  ///< [0..1]
   size_t surface_visible = 0;     ///< visible surface elements (5 cm)
+  /// In simulation, with a mesh: its distance to the world's true surfaces (area-weighted samples of
+  /// its faces every 1 cm, eval::measureSurfaceAccuracy) and the share of the visible surface it
+  /// covers within 3 cm.
+  bool has_mesh_accuracy = false;
+  MeshAccuracy mesh;
 };
 
 /// Ground-truth coverage of a simulated run (eval::groundTruthCoverageOfRun on the final map).
@@ -70,6 +82,7 @@ struct TrueCoverage {
   /// The visible surface held by the map [0..1] and the visible elements; nullopt: not measured.
   std::optional<double> surface_coverage;
   size_t surface_visible = 0;
+  std::optional<MeshAccuracy> mesh;  ///< the mesh's accuracy; nullopt: no mesh or not measured
 };
 
 /// Computes the summary of a mission state.
