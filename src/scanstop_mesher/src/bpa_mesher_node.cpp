@@ -253,8 +253,9 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   const std::string vdb = !config_.fused_map_output.empty()
                               ? config_.fused_map_output
                               : output.substr(0, output.find_last_of('/') + 1) + "fused_map.vdb";
-  // A map too large for the grids at fused_voxel_m is fused with coarser voxels (the grids' memory
-  // falls with about the square of the voxel: a band of voxels around every surface), up to 4 times
+  // A map too large for the grids at fused_voxel_m is built in slabs along x (meshFusedMapDirectory);
+  // one whose 1 m slabs do not fit either is fused with coarser voxels (the grids' memory falls with
+  // about the square of the voxel: a band of voxels around every surface), up to 4 times
   // fused_voxel_m; beyond that GridBoundError goes to the caller (Ball Pivoting).
   FusedMesh r;
   for (double voxel = config_.fused_voxel_m;; voxel *= 1.5) {
@@ -267,13 +268,18 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
     } catch (const GridBoundError& e) {
       if (voxel * 1.5 > 4.0 * config_.fused_voxel_m + 1e-9) throw;
       ROS_WARN(
-          "bpa_mesher_node: the fused map at a %.3f m voxel needs more than fused_max_grid_mb = %.0f MB: fusing "
-          "again at %.3f m",
+          "bpa_mesher_node: the fused map at a %.3f m voxel needs more than fused_max_grid_mb = %.0f MB even in 1 m "
+          "slabs: fusing again at %.3f m",
           voxel, config_.fused_max_grid_mb, voxel * 1.5);
       malloc_trim(0);
     }
   }
   std::string coarser;
+  if (r.slabs > 1)
+    ROS_WARN(
+        "bpa_mesher_node: the fused map of %s would pass fused_max_grid_mb = %.0f MB as a whole: built and "
+        "meshed in %zu slabs along x (the largest %.0f MB), no .vdb of the whole",
+        config_.map_dir.c_str(), config_.fused_max_grid_mb, r.slabs, r.memory_bytes / 1048576.0);
   if (fc.voxel_m != config_.fused_voxel_m) {
     std::ostringstream why;
     why << "fused at a " << fc.voxel_m << " m voxel: at " << config_.fused_voxel_m
@@ -296,8 +302,11 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   msg << r.mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << r.scans
       << " scans of map " << config_.map_dir << " (voxel " << fc.voxel_m << " m, " << r.voxels << " voxels, "
       << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s; "
-      << (r.save_problem.empty() ? "fused map in " + vdb : std::string("fused map not saved")) << ", "
-      << r.surface.size() << " surface points)";
+      << (r.slabs > 1 ? std::string("built in ") + std::to_string(r.slabs) +
+                            " slabs along x, the largest within fused_max_grid_mb: no .vdb of the whole"
+          : r.save_problem.empty() ? "fused map in " + vdb
+                                   : std::string("fused map not saved"))
+      << ", " << r.surface.size() << " surface points)";
   finishMesh(r.mesh, output, r.surface_points, msg.str(), skipped, res);
 }
 

@@ -5,8 +5,12 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <unordered_map>
 #include <utility>
 
 #include <openvdb/io/File.h>
@@ -110,6 +114,9 @@ void FusedMapConfig::validate() const {
   requireInRange("max_weight", max_weight, 1.0, 1e6);
   requireInRange("min_weight", min_weight, 1.0, max_weight);
   requireInRange("max_grid_mb", max_grid_mb, 1.0, 1e6, "MB");
+  if (clip_x_min_voxel > clip_x_max_voxel)
+    throw ConfigError("clip_x_min_voxel = " + std::to_string(clip_x_min_voxel) +
+                      " is above clip_x_max_voxel = " + std::to_string(clip_x_max_voxel));
 }
 
 FusedMap::FusedMap(const FusedMapConfig& config) : config_(config), grids_(new Grids) {
@@ -138,6 +145,8 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
   const float max_w = static_cast<float>(config_.max_weight);
   const Eigen::Vector3d o = origin.cast<double>();
   size_t used = 0, updates = 0;
+  const int clip_lo = config_.clip_x_min_voxel, clip_hi = config_.clip_x_max_voxel;
+  const bool clipped = clip_lo != std::numeric_limits<int>::min() || clip_hi != std::numeric_limits<int>::max();
   // Both grids get a leaf node at the same place: the bound counts their leaves as they are allocated.
   using Leaf = openvdb::FloatTree::LeafNodeType;  // the node and its separately allocated voxel buffer
   const double leaf_bytes = 2.0 * (sizeof(Leaf) + Leaf::SIZE * sizeof(float));
@@ -158,7 +167,12 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
     const int splat = config_.splat;
     // Thin traversal: the whole beam (splat 0), else only the carved part before the band.
     const double t0_beam = std::max(0.0, r - trunc - config_.carve_m), t1_beam = splat > 0 ? r - trunc : r + trunc;
+    if (clipped) {  // a beam whose voxels all lie outside the slab (a voxel of margin, and the splat) is skipped
+      const double xa = (o.x() + t0_beam * dir.x()) / vs, xb = (o.x() + (r + trunc) * dir.x()) / vs;
+      if (std::max(xa, xb) + 2 + splat < clip_lo || std::min(xa, xb) - 2 - splat > clip_hi) continue;
+    }
     const auto update = [&](const Coord& c, double sdf) {
+      if (c.x() < clip_lo || c.x() > clip_hi) return;                // another slab's voxel
       const float value = static_cast<float>(std::min(sdf, trunc));  // before the band: free (+trunc)
       const float w = weight.getValue(c);
       if (w == 0.0f && !weight.probeConstLeaf(c) && ++stats_.leaves_created > max_leaves) {
@@ -241,6 +255,10 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
 }
 
 ScanPoints FusedMap::surfacePoints() const {
+  return surfacePoints(std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
+}
+
+ScanPoints FusedMap::surfacePoints(int cell_x_min, int cell_x_max) const {
   const ConstAccessor tsdf = grids_->tsdf->getConstAccessor();
   const ConstAccessor weight = grids_->weight->getConstAccessor();
   const float min_w = static_cast<float>(config_.min_weight);
@@ -250,6 +268,7 @@ ScanPoints FusedMap::surfacePoints() const {
   for (auto it = grids_->weight->cbeginValueOn(); it; ++it) {
     if (!it.isVoxelValue() || *it < min_w) continue;
     const Coord c = it.getCoord();
+    if (c.x() < cell_x_min || c.x() >= cell_x_max) continue;
     if (!loadCell(tsdf, weight, c, min_w, v) || !hasCrossing(v)) continue;
     Eigen::Vector3d x = meanCrossing(v);
     Eigen::Vector3d g;
@@ -264,7 +283,37 @@ ScanPoints FusedMap::surfacePoints() const {
   return out;
 }
 
+namespace {
+/// Drops pinched fans (dropPinchedFans) and the vertices no face uses any more.
+void dropPinchedFansOf(TriangleMesh& mesh) {
+  if (dropPinchedFans(mesh.faces, mesh.vertices.size()) == 0) return;
+  TriangleMesh kept;
+  std::vector<int> remap(mesh.vertices.size(), -1);
+  for (const Eigen::Vector3i& f : mesh.faces) {
+    Eigen::Vector3i g;
+    for (int k = 0; k < 3; ++k) {
+      if (remap[f[k]] < 0) {
+        remap[f[k]] = static_cast<int>(kept.vertices.size());
+        kept.vertices.push_back(mesh.vertices[f[k]]);
+        kept.normals.push_back(mesh.normals[f[k]]);
+      }
+      g[k] = remap[f[k]];
+    }
+    kept.faces.push_back(g);
+  }
+  mesh = std::move(kept);
+}
+}  // namespace
+
 TriangleMesh FusedMap::extractMesh() const {
+  TriangleMesh mesh = extractSlabMesh(std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
+  // Where cells next to unseen ones were left out, two sheets can meet in one vertex: keep each
+  // such vertex's largest fan (a manifold mesh for the checks and the Ball Pivoting tools).
+  dropPinchedFansOf(mesh);
+  return mesh;
+}
+
+TriangleMesh FusedMap::extractSlabMesh(int cell_x_min, int cell_x_max) const {
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
@@ -278,11 +327,13 @@ TriangleMesh FusedMap::extractMesh() const {
   std::vector<int> index(points.size(), -1);
   std::vector<char> ok(points.size(), 0);
   std::vector<Eigen::Vector3f> normals(points.size(), Eigen::Vector3f::Zero());
+  std::vector<int> cell_x(points.size(), 0);
   float v[8];
   for (size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d u(points[i].x() / vs, points[i].y() / vs, points[i].z() / vs);
     const Coord c(static_cast<int>(std::floor(u.x())), static_cast<int>(std::floor(u.y())),
                   static_cast<int>(std::floor(u.z())));
+    cell_x[i] = c.x();
     if (!loadCell(tsdf, weight, c, min_w, v)) continue;
     Eigen::Vector3d g;
     trilinear(v, (u - Eigen::Vector3d(c.x(), c.y(), c.z())).cwiseMax(0.0).cwiseMin(1.0), &g);
@@ -304,29 +355,18 @@ TriangleMesh FusedMap::extractMesh() const {
     if (!ok[a] || !ok[b] || !ok[c]) return;
     mesh.faces.emplace_back(use(a), use(b), use(c));
   };
-  for (const openvdb::Vec3I& t : triangles) add(t[0], t[1], t[2]);
+  // A polygon belongs to the slab of its cells' smallest x index (every polygon to one slab).
+  const auto owned = [&](std::initializer_list<uint32_t> corners) {
+    int lowest = std::numeric_limits<int>::max();
+    for (const uint32_t k : corners) lowest = std::min(lowest, cell_x[k]);
+    return lowest >= cell_x_min && lowest < cell_x_max;
+  };
+  for (const openvdb::Vec3I& t : triangles)
+    if (owned({t[0], t[1], t[2]})) add(t[0], t[1], t[2]);
   for (const openvdb::Vec4I& q : quads) {
+    if (!owned({q[0], q[1], q[2], q[3]})) continue;
     add(q[0], q[1], q[2]);
     add(q[0], q[2], q[3]);
-  }
-  // Where cells next to unseen ones were left out, two sheets can meet in one vertex: keep each
-  // such vertex's largest fan (a manifold mesh for the checks and the Ball Pivoting tools).
-  if (dropPinchedFans(mesh.faces, mesh.vertices.size()) > 0) {
-    TriangleMesh kept;
-    std::vector<int> remap(mesh.vertices.size(), -1);
-    for (const Eigen::Vector3i& f : mesh.faces) {
-      Eigen::Vector3i g;
-      for (int k = 0; k < 3; ++k) {
-        if (remap[f[k]] < 0) {
-          remap[f[k]] = static_cast<int>(kept.vertices.size());
-          kept.vertices.push_back(mesh.vertices[f[k]]);
-          kept.normals.push_back(mesh.normals[f[k]]);
-        }
-        g[k] = remap[f[k]];
-      }
-      kept.faces.push_back(g);
-    }
-    mesh = std::move(kept);
   }
   return mesh;
 }
@@ -404,32 +444,147 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
 
 bool isFusedMeshMethod(const std::string& method) { return method == "marching_cubes" || method == "fused_bpa"; }
 
-FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
-                                const MesherConfig& bpa, std::vector<std::string>* skipped,
-                                const std::string& save_path) {
-  if (!isFusedMeshMethod(method))
-    throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
-  FusedMap fused(config);
+namespace {
+
+/// The x range [m] of a map directory's readings at their map poses (scans that cannot be read are
+/// skipped here: integrateMapDirectory names them).
+std::pair<double, double> mapXRange(const std::string& dir) {
+  const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, nullptr);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (size_t s = 0; s < opened->size(); ++s) {
+    PointCloud scan;
+    try {
+      scan = opened->loadScan(s);
+    } catch (const std::exception&) {
+      continue;
+    }
+    const Eigen::Isometry3f T = opened->scans()[s].map_pose.toIsometry3f();
+    for (const Eigen::Vector3f& p : scan.points) {
+      if (!p.allFinite()) continue;
+      const double x = (T * p).x();
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+  }
+  return {lo, hi};
+}
+
+/// meshFusedMapDirectory in slabs along x, each built alone (FusedMapConfig::clip_x_*_voxel) and
+/// halved while it passes max_grid_mb.
+FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, const std::string& method,
+                      const MesherConfig& bpa, std::vector<std::string>* skipped, double min_slab_m) {
+  const double vs = config.voxel_m;
+  const std::pair<double, double> x = mapXRange(dir);
+  if (!(x.first <= x.second)) throw IoError(dir, "no readable point in its scans");
+  const int first = static_cast<int>(std::floor(x.first / vs)) - 2,
+            last = static_cast<int>(std::floor(x.second / vs)) + 2;
+  const int min_cells = std::max(8, static_cast<int>(std::ceil(min_slab_m / vs)));
   FusedMesh out;
-  out.scans = integrateMapDirectory(fused, dir, skipped);
-  out.integrate_s = fused.stats().integrate_seconds;
-  out.voxels = fused.activeVoxels();
-  out.memory_bytes = fused.memoryBytes();
+  out.slabs = 0;
+  ScanPoints surface;
+  // Vertices within a cell of a slab border, by their exact coordinates: two slabs compute the
+  // same vertex bit for bit (the same voxels, updated by the same readings in the same order).
+  std::unordered_map<std::string, int> border_vertices;
+  std::vector<int> borders;
+  bool first_pass = true;
+  const std::function<void(int, int)> build = [&](int a, int b) {  // cells [a, b)
+    FusedMapConfig slab = config;
+    slab.clip_x_min_voxel = a - 1;
+    slab.clip_x_max_voxel = b + 2;
+    FusedMap fused(slab);
+    std::vector<std::string> later;  // every pass names the same skipped scans: the first one says it
+    try {
+      out.scans = integrateMapDirectory(fused, dir, first_pass ? skipped : (skipped ? &later : nullptr));
+    } catch (const GridBoundError& e) {
+      if (b - a < 2 * min_cells)
+        throw GridBoundError(std::string(e.what()) + " (in a slab of " + std::to_string((b - a) * vs) + " m along x)");
+      build(a, a + (b - a) / 2);
+      build(a + (b - a) / 2, b);
+      return;
+    }
+    first_pass = false;
+    ++out.slabs;
+    out.integrate_s += fused.stats().integrate_seconds;
+    out.voxels += fused.activeVoxels();
+    out.memory_bytes = std::max(out.memory_bytes, fused.memoryBytes());
+    const auto start = std::chrono::steady_clock::now();
+    const ScanPoints part = fused.surfacePoints(a, b);
+    surface.points.insert(surface.points.end(), part.points.begin(), part.points.end());
+    surface.normals.insert(surface.normals.end(), part.normals.begin(), part.normals.end());
+    if (method == "marching_cubes") {
+      const TriangleMesh m = fused.extractSlabMesh(a, b);
+      std::vector<int> index(m.vertices.size());
+      for (size_t i = 0; i < m.vertices.size(); ++i) {
+        const int cell = static_cast<int>(std::floor(m.vertices[i].x() / vs));
+        const bool near_border = cell <= a || cell >= b - 1;
+        std::string key;
+        if (near_border) {
+          key.assign(reinterpret_cast<const char*>(m.vertices[i].data()), 3 * sizeof(float));
+          const auto found = border_vertices.find(key);
+          if (found != border_vertices.end()) {
+            index[i] = found->second;
+            continue;
+          }
+        }
+        index[i] = static_cast<int>(out.mesh.vertices.size());
+        out.mesh.vertices.push_back(m.vertices[i]);
+        out.mesh.normals.push_back(m.normals[i]);
+        if (near_border) border_vertices.emplace(key, index[i]);
+      }
+      for (const Eigen::Vector3i& f : m.faces) out.mesh.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
+    }
+    out.mesh_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  const int mid = first + (last - first) / 2;
+  build(first, mid);
+  build(mid, last);
   const auto start = std::chrono::steady_clock::now();
-  const ScanPoints surface = fused.surfacePoints();
   if (method == "marching_cubes") {
-    out.mesh = fused.extractMesh();
+    dropPinchedFansOf(out.mesh);
   } else {
     out.surface_points = surface.size();
     if (surface.size() > 0) out.mesh = buildMesh(surface, bpa).mesh;
   }
-  out.mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  out.surface = surface.points;
-  if (!save_path.empty()) try {
-      fused.save(save_path);
-    } catch (const IoError& e) {
-      out.save_problem = e.what();
+  out.mesh_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.surface = std::move(surface.points);
+  return out;
+}
+
+}  // namespace
+
+FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
+                                const MesherConfig& bpa, std::vector<std::string>* skipped,
+                                const std::string& save_path, double min_slab_m) {
+  if (!isFusedMeshMethod(method))
+    throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
+  FusedMesh out;
+  const size_t skipped_before = skipped ? skipped->size() : 0;
+  try {
+    FusedMap fused(config);
+    out.scans = integrateMapDirectory(fused, dir, skipped);
+    out.integrate_s = fused.stats().integrate_seconds;
+    out.voxels = fused.activeVoxels();
+    out.memory_bytes = fused.memoryBytes();
+    const auto start = std::chrono::steady_clock::now();
+    const ScanPoints surface = fused.surfacePoints();
+    if (method == "marching_cubes") {
+      out.mesh = fused.extractMesh();
+    } else {
+      out.surface_points = surface.size();
+      if (surface.size() > 0) out.mesh = buildMesh(surface, bpa).mesh;
     }
+    out.mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.surface = surface.points;
+    if (!save_path.empty()) try {
+        fused.save(save_path);
+      } catch (const IoError& e) {
+        out.save_problem = e.what();
+      }
+  } catch (const GridBoundError&) {
+    // Too large as a whole: in slabs (the scans' problems are named again by the slabs' pass).
+    if (skipped) skipped->resize(skipped_before);
+    out = meshInSlabs(dir, config, method, bpa, skipped, min_slab_m);
+  }
   if (out.mesh.faces.empty())
     throw std::runtime_error("nothing to mesh: the fused map of " + dir + " holds no observed surface");
   return out;

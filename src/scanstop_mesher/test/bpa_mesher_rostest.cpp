@@ -198,44 +198,46 @@ TEST(BpaMesherNode, AFusedMethodKeepsTheFusedMapWithTheRunAndShowsItsSurface) {
   EXPECT_GT(top, 1.0f);
 }
 
-// A map whose fused grids would pass fused_max_grid_mb even at 4 times the voxel is meshed by Ball Pivoting of its
-// points: a mesh, the reason in the response, no fused map file.
-TEST(BpaMesherNode, AMapTooLargeForTheFusedGridsIsFusedCoarserOrMeshedByBallPivoting) {
+// A map whose fused grids would pass fused_max_grid_mb as a whole is built in slabs along x at the
+// same voxel; one whose 1 m slabs do not fit either at a coarser voxel (up to 4 times); one that fits
+// at none is meshed by Ball Pivoting of its points. Each response says which.
+TEST(BpaMesherNode, AMapTooLargeForTheFusedGridsIsBuiltInSlabsOrCoarserOrMeshedByBallPivoting) {
   ros::NodeHandle nh;
   struct stat map_st;
   if (::stat((g_map_dir + "/poses.csv").c_str(), &map_st) != 0) {
     ::mkdir(g_map_dir.c_str(), 0755);
     writeMap(g_map_dir);
   }
-  ASSERT_TRUE(ros::service::waitForService("bounded/mesher/build_mesh", 30000));
-  ros::ServiceClient client = nh.serviceClient<scanstop_msgs::BuildMesh>("bounded/mesher/build_mesh");
-  scanstop_msgs::BuildMesh srv;
-  srv.request.output_path = g_map_dir + "/bounded_mesh.ply";
-  ASSERT_TRUE(client.call(srv));
-  ASSERT_TRUE(srv.response.success) << srv.response.message;
-  EXPECT_GT(srv.response.triangles, 2000u);
+  const auto build = [&](const std::string& ns) {
+    EXPECT_TRUE(ros::service::waitForService(ns + "/mesher/build_mesh", 30000)) << ns;
+    ros::ServiceClient client = nh.serviceClient<scanstop_msgs::BuildMesh>(ns + "/mesher/build_mesh");
+    scanstop_msgs::BuildMesh srv;
+    srv.request.output_path = g_map_dir + "/" + ns + "_mesh.ply";
+    EXPECT_TRUE(client.call(srv)) << ns;
+    EXPECT_TRUE(srv.response.success) << ns << ": " << srv.response.message;
+    struct stat st;
+    EXPECT_EQ(::stat((g_map_dir + "/" + ns + "_mesh.ply").c_str(), &st), 0) << ns << ": no mesh";
+    EXPECT_NE(::stat((g_map_dir + "/" + ns + ".vdb").c_str(), &st), 0)
+        << ns << ": a .vdb of a fused map not built whole";
+    return srv.response;
+  };
+  const scanstop_msgs::BuildMesh::Response slabs = build("slabs");
+  EXPECT_GT(slabs.triangles, 2000u);
+  EXPECT_NE(slabs.message.find("by marching_cubes of the fused map"), std::string::npos) << slabs.message;
+  EXPECT_NE(slabs.message.find("(voxel 0.02 m"), std::string::npos) << slabs.message;
+  EXPECT_NE(slabs.message.find(" slabs along x, the largest within fused_max_grid_mb"), std::string::npos)
+      << slabs.message;
+  const scanstop_msgs::BuildMesh::Response coarser = build("coarser");
+  EXPECT_GT(coarser.triangles, 1000u);
   EXPECT_NE(
-      srv.response.message.find("fused_max_grid_mb = 1 MB even at 4 times fused_voxel_m: meshed by Ball Pivoting"),
+      coarser.message.find("m voxel: at 0.02 m (fused_voxel_m) the grids needed more than fused_max_grid_mb = 1 MB"),
       std::string::npos)
-      << srv.response.message;
-  struct stat st;
-  EXPECT_EQ(::stat((g_map_dir + "/bounded_mesh.ply").c_str(), &st), 0) << "no mesh";
-  EXPECT_NE(::stat((g_map_dir + "/bounded.vdb").c_str(), &st), 0)
-      << "a fused map file of a fused map that was not built";
-
-  // A bound the map fits at a coarser voxel: fused and meshed there, and the response says so.
-  ASSERT_TRUE(ros::service::waitForService("coarser/mesher/build_mesh", 30000));
-  client = nh.serviceClient<scanstop_msgs::BuildMesh>("coarser/mesher/build_mesh");
-  srv.request.output_path = g_map_dir + "/coarser_mesh.ply";
-  ASSERT_TRUE(client.call(srv));
-  ASSERT_TRUE(srv.response.success) << srv.response.message;
-  EXPECT_GT(srv.response.triangles, 1000u);
-  EXPECT_NE(srv.response.message.find("by marching_cubes of the fused map"), std::string::npos) << srv.response.message;
-  EXPECT_NE(
-      srv.response.message.find("m voxel: at 0.02 m (fused_voxel_m) the grids needed more than fused_max_grid_mb"),
-      std::string::npos)
-      << srv.response.message;
-  EXPECT_EQ(::stat((g_map_dir + "/coarser.vdb").c_str(), &st), 0) << "no fused map beside the mesh";
+      << coarser.message;
+  const scanstop_msgs::BuildMesh::Response bounded = build("bounded");
+  EXPECT_GT(bounded.triangles, 2000u);
+  EXPECT_NE(bounded.message.find("fused_max_grid_mb = 1 MB even at 4 times fused_voxel_m: meshed by Ball Pivoting"),
+            std::string::npos)
+      << bounded.message;
 }
 
 int main(int argc, char** argv) {

@@ -409,3 +409,47 @@ TEST(FusedMap, AMapDirectoryIsMeshedByEitherFusedMethod) {
   EXPECT_THROW(meshFusedMapDirectory(tmp.path + "/map", config, "bpa", MesherConfig()), std::invalid_argument);
   EXPECT_THROW(meshFusedMapDirectory(tmp.path + "/missing", config, "marching_cubes", MesherConfig()), IoError);
 }
+
+TEST(FusedMap, AMapTooLargeForTheGridsIsMeshedInSlabsWithTheSameMesh) {
+  // The grids bounded below what the room needs as a whole: built in slabs along x, whose meshes
+  // meet exactly (the same vertices, welded at the borders) and make the whole map's mesh.
+  test_util::TempDir tmp("fused_map_test");
+  test::writeRoomMap(tmp.path + "/map");
+  FusedMapConfig config;
+  config.carve_m = 0.2;
+  config.voxel_m = 0.01;  // a few MB of grids, so that a bound in whole MB splits them
+  config.truncation_m = 0.03;
+  const FusedMesh whole = meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig());
+  ASSERT_EQ(whole.slabs, 1u);
+  config.max_grid_mb = 0.45 * whole.memory_bytes / 1048576.0;
+  const FusedMesh slabs = meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig(), nullptr,
+                                                tmp.path + "/fused_map.vdb", 0.2);
+  EXPECT_GE(slabs.slabs, 3u);
+  EXPECT_LE(slabs.memory_bytes, config.max_grid_mb * 1048576.0 * 1.3);  // leaf nodes plus the internal ones
+  EXPECT_EQ(slabs.scans, 2u);
+  EXPECT_EQ(slabs.mesh.faces.size(), whole.mesh.faces.size());
+  EXPECT_EQ(slabs.mesh.vertices.size(), whole.mesh.vertices.size());
+  const MeshTopology whole_topology = analyzeTopology(whole.mesh);
+  const MeshTopology slab_topology = analyzeTopology(slabs.mesh);
+  EXPECT_EQ(slab_topology.boundary_edges, whole_topology.boundary_edges);  // no seam left open
+  EXPECT_EQ(slab_topology.nonmanifold_edges, 0u);
+  EXPECT_EQ(slab_topology.nonmanifold_vertices, 0u);
+  // Every vertex of the slabs' mesh is one of the whole's.
+  std::vector<Eigen::Vector3f> a = whole.mesh.vertices, b = slabs.mesh.vertices;
+  const auto less = [](const Eigen::Vector3f& p, const Eigen::Vector3f& q) {
+    return std::lexicographical_compare(p.data(), p.data() + 3, q.data(), q.data() + 3);
+  };
+  std::sort(a.begin(), a.end(), less);
+  std::sort(b.begin(), b.end(), less);
+  EXPECT_TRUE(a == b);
+  EXPECT_EQ(slabs.surface.size(), whole.surface.size());
+  // A slab no narrower than min_slab_m that still does not fit: GridBoundError, naming the slab.
+  config.max_grid_mb = 1.0;
+  ASSERT_GT(whole.memory_bytes, 6 * 1048576u);
+  try {
+    meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig(), nullptr, "", 1.0);
+    ADD_FAILURE() << "no GridBoundError";
+  } catch (const GridBoundError& e) {
+    EXPECT_NE(std::string(e.what()).find("in a slab of"), std::string::npos) << e.what();
+  }
+}

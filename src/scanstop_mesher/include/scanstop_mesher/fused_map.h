@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -67,6 +68,12 @@ struct FusedMapConfig {
   /// 500 MB: about 0.8 GB for the whole process. Two 50-plane room_10x8 scans at 0.02 m: 50 MB with
   /// carve_m 0.2, 180 MB carving whole beams.
   double max_grid_mb = 500.0;
+  /// Only voxels whose x index lies in [clip_x_min_voxel, clip_x_max_voxel] are updated (voxel i is
+  /// centred at x = i * voxel_m): one slab of a map too large for max_grid_mb as a whole
+  /// (meshFusedMapDirectory). Each voxel inside gets exactly the updates it gets without the clip,
+  /// in the same order. Default: every voxel.
+  int clip_x_min_voxel = std::numeric_limits<int>::min();
+  int clip_x_max_voxel = std::numeric_limits<int>::max();
   /// Throws ConfigError naming the field, its value and the allowed range.
   void validate() const;
 };
@@ -104,6 +111,9 @@ class FusedMap {
   /// zero level of the cell's trilinear field by one Newton step. Normals: the field's gradient
   /// there, normalized, pointing to the observed free (positive) side. `origins`/`view` stay empty.
   ScanPoints surfacePoints() const;
+  /// Those of the cells whose x index lies in [cell_x_min, cell_x_max) (cell i spans voxel centres i
+  /// and i + 1 along x): one slab's own.
+  ScanPoints surfacePoints(int cell_x_min, int cell_x_max) const;
 
   /// A triangle mesh of the zero level set: openvdb::tools::volumeToMesh (isovalue 0, adaptivity 0),
   /// quads split into two triangles, only polygons whose vertices lie in surface cells (all 8
@@ -112,6 +122,10 @@ class FusedMap {
   /// sheets meet in one vertex (at the rim of the seen space) only its largest fan is kept
   /// (dropPinchedFans), so the mesh is manifold.
   TriangleMesh extractMesh() const;
+  /// One slab's part of that mesh: the polygons whose cells' smallest x index lies in
+  /// [cell_x_min, cell_x_max) (every polygon of the map belongs to exactly one slab of a partition),
+  /// pinched fans not yet dropped (weldSlabMeshes does, over the whole).
+  TriangleMesh extractSlabMesh(int cell_x_min, int cell_x_max) const;
 
   /// Signed distance [m] and weight of the voxel containing the point p [m] (map frame); weight 0
   /// (and distance truncation_m) for a voxel never updated.
@@ -151,8 +165,9 @@ struct FusedMesh {
   size_t surface_points = 0;             ///< fused surface points meshed ("fused_bpa")
   std::vector<Eigen::Vector3f> surface;  ///< the fused map's surface points (for display) [m]
   std::string save_problem;              ///< why save_path could not be written ("" when it was, or none given)
-  size_t voxels = 0;                     ///< active voxels of the fused map
-  size_t memory_bytes = 0;               ///< of its grids
+  size_t voxels = 0;                     ///< active voxels of the fused map (summed over slabs)
+  size_t memory_bytes = 0;               ///< of its grids (the largest slab's)
+  size_t slabs = 1;                      ///< slabs along x it was built in (1: the whole map at once)
   double integrate_s = 0.0, mesh_s = 0.0;
 };
 /// The methods meshFusedMapDirectory takes: "marching_cubes" (FusedMap::extractMesh) and
@@ -161,11 +176,15 @@ bool isFusedMeshMethod(const std::string& method);
 /// Integrates every scan of the map directory (integrateMapDirectory, same errors) and meshes the
 /// fused map by `method` (`bpa`: the Ball Pivoting settings of "fused_bpa"); with `save_path`, the
 /// fused map is written there too (FusedMap::save, .vdb; a failure is said in save_problem, the mesh
-/// stands). Throws std::invalid_argument for another method and std::runtime_error when the fused map
-/// holds no observed surface.
+/// stands). A map whose grids would pass config.max_grid_mb is built and meshed in slabs along x
+/// instead (halved until each fits, down to min_slab_m; the slabs' meshes meet exactly and are
+/// welded, then pinched fans dropped over the whole): the same mesh within float rounding, memory
+/// bounded by one slab; no .vdb then (save_problem says so). Throws GridBoundError when a
+/// min_slab_m slab does not fit, std::invalid_argument for another method and std::runtime_error
+/// when the fused map holds no observed surface.
 FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
                                 const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr,
-                                const std::string& save_path = "");
+                                const std::string& save_path = "", double min_slab_m = 1.0);
 
 }  // namespace mesher
 }  // namespace scanstop
