@@ -100,6 +100,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   params.optional("mesh_method", c.mesh_method);
   params.optional("fused_voxel_m", c.fused_voxel_m);
   params.optional("fused_carve_m", c.fused_carve_m);
+  params.optional("fused_carve_far", c.fused_carve_far);
   params.optional("fused_max_grid_mb", c.fused_max_grid_mb);
   params.optional("fused_map_output", c.fused_map_output);
   params.rejectUnknown();
@@ -247,6 +248,7 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
                                          scanstop_msgs::BuildMesh::Response& res) {
   FusedMapConfig fc;
   fc.carve_m = config_.fused_carve_m;
+  fc.carve_far = config_.fused_carve_far;
   fc.max_grid_mb = config_.fused_max_grid_mb;
   std::vector<std::string> skipped;
   // The fused map is kept with the run: beside the mesh unless fused_map_output says where.

@@ -254,6 +254,83 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
   return used;
 }
 
+namespace {
+/// Amanatides-Woo over the unit cells of q from q = a to q = b: visit(cell, s0, s1) for each cell the
+/// segment crosses, [s0, s1] the segment's parameter range in it (0 at a, 1 at b), in order.
+template <class Visit>
+void walkCells(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Visit visit) {
+  const Eigen::Vector3d d = b - a;
+  Eigen::Vector3i cell(static_cast<int>(std::floor(a.x())), static_cast<int>(std::floor(a.y())),
+                       static_cast<int>(std::floor(a.z())));
+  const Eigen::Vector3i end(static_cast<int>(std::floor(b.x())), static_cast<int>(std::floor(b.y())),
+                            static_cast<int>(std::floor(b.z())));
+  Eigen::Vector3i step;
+  Eigen::Vector3d t_max, t_delta;
+  for (int k = 0; k < 3; ++k) {
+    step[k] = d[k] > 0 ? 1 : -1;
+    if (std::abs(d[k]) < 1e-12) {
+      t_max[k] = t_delta[k] = INFINITY;
+    } else {
+      t_delta[k] = 1.0 / std::abs(d[k]);
+      t_max[k] = ((d[k] > 0 ? cell[k] + 1 : cell[k]) - a[k]) / d[k];
+    }
+  }
+  const long max_steps = (end - cell).cwiseAbs().sum() + 4;
+  double s = 0.0;
+  for (long n = 0; n <= max_steps; ++n) {
+    int k = 0;
+    if (t_max[1] < t_max[k]) k = 1;
+    if (t_max[2] < t_max[k]) k = 2;
+    visit(cell, s, std::min(1.0, t_max[k]));
+    if (cell == end || t_max[k] > 1.0) break;
+    s = t_max[k];
+    cell[k] += step[k];
+    t_max[k] += t_delta[k];
+  }
+}
+}  // namespace
+
+size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
+  if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
+  const auto t0 = std::chrono::steady_clock::now();
+  openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
+  openvdb::FloatGrid::Accessor weight = grids_->weight->getAccessor();
+  const double vs = config_.voxel_m, trunc = config_.truncation_m, near = trunc + config_.carve_m;
+  const float max_w = static_cast<float>(config_.max_weight), free_value = static_cast<float>(trunc);
+  const int clip_lo = config_.clip_x_min_voxel, clip_hi = config_.clip_x_max_voxel;
+  const Eigen::Vector3d o = origin.cast<double>();
+  const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.5);
+  size_t updates = 0;
+  constexpr int kLeaf = 8;  // voxels per leaf edge (OpenVDB's FloatTree)
+  for (const Eigen::Vector3f& pf : points) {
+    if (!pf.allFinite()) continue;
+    Eigen::Vector3d dir = pf.cast<double>() - o;
+    const double r = dir.norm();
+    if (!(r > near)) continue;
+    dir /= r;
+    // In voxel units u = x / voxel + 0.5 (voxel(u) = floor(u)); leaves are 8 voxels: floor(u / 8).
+    const Eigen::Vector3d ua = o / vs + half, ub = (o + (r - near) * dir) / vs + half;
+    walkCells(ua / kLeaf, ub / kLeaf, [&](const Eigen::Vector3i& leaf, double s0, double s1) {
+      if (!weight.probeConstLeaf(Coord(leaf.x() * kLeaf, leaf.y() * kLeaf, leaf.z() * kLeaf))) return;
+      walkCells(ua + s0 * (ub - ua), ua + s1 * (ub - ua), [&](const Eigen::Vector3i& v, double, double) {
+        if (v.x() < clip_lo || v.x() > clip_hi) return;
+        if (Eigen::Vector3i(v.x() >> 3, v.y() >> 3, v.z() >> 3) != leaf) return;  // the next leaf's: its own turn
+        const Coord c(v.x(), v.y(), v.z());
+        const float w = weight.getValue(c);
+        if (w == 0.0f) return;                                         // no voxel here: none is made
+        if (r - (v.cast<double>() * vs - o).dot(dir) <= near) return;  // integrate() carved it
+        const float D = tsdf.getValue(c);
+        tsdf.setValue(c, (D * w + free_value) / (w + 1.0f));
+        weight.setValue(c, std::min(w + 1.0f, max_w));
+        ++updates;
+      });
+    });
+  }
+  stats_.voxel_updates += updates;
+  stats_.integrate_seconds += elapsed(t0);
+  return updates;
+}
+
 ScanPoints FusedMap::surfacePoints() const {
   return surfacePoints(std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
 }
@@ -439,6 +516,21 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
     ++loaded;
   }
   if (loaded == 0) throw IoError(dir, "none of its " + std::to_string(map.size()) + " scan files could be read");
+  if (fused.config().carve_far) {  // every beam's far free space, now that every surface's voxels exist
+    for (size_t s = 0; s < map.size(); ++s) {
+      const MapScanInfo& info = map.scans()[s];
+      PointCloud scan;
+      try {
+        scan = map.loadScan(s);
+      } catch (const std::exception&) {
+        continue;  // named in the first pass
+      }
+      const Eigen::Isometry3f T_map_base = info.map_pose.toIsometry3f();
+      points.resize(scan.points.size());
+      for (size_t i = 0; i < scan.points.size(); ++i) points[i] = T_map_base * scan.points[i];
+      fused.carveFar(points, T_map_base * info.sensor_origin.cast<float>());
+    }
+  }
   return loaded;
 }
 

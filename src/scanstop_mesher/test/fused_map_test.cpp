@@ -152,6 +152,27 @@ TEST(FusedMap, FreeSpaceCarvingRemovesWhatLaterScansSeeThrough) {
   for (const auto& p : without.points) wall_without += std::abs(p.x() - 3.0f) < 0.01f;
   EXPECT_GT(wall_without, 2000u);
   EXPECT_GE(wall_with, wall_without * 99 / 100);
+
+  // The spurious patch lies 1.5 m before the later scans' hits: 0.2 m of carving does not reach it;
+  // the far carving pass (carve_far: the rest of each beam, in voxels that exist) removes it, and
+  // leaves the wall as the whole beam does.
+  FusedMapConfig near_only;
+  near_only.carve_m = 0.2;
+  FusedMapConfig far = near_only;
+  far.carve_far = true;
+  FusedMap short_carve(near_only), far_carve(far);
+  for (FusedMap* m : {&short_carve, &far_carve}) {
+    m->integrate(first, a);
+    m->integrate(second, b);
+    m->integrate(third, c);
+  }
+  EXPECT_GT(far_carve.carveFar(first, a) + far_carve.carveFar(second, b) + far_carve.carveFar(third, c), 100u);
+  EXPECT_GE(countNear(short_carve.surfacePoints().points, spurious, 0.1f), 4u);  // the control
+  const ScanPoints far_points = far_carve.surfacePoints();
+  EXPECT_EQ(countNear(far_points.points, spurious, 0.1f), 0u);
+  size_t wall_far = 0;
+  for (const auto& p : far_points.points) wall_far += std::abs(p.x() - 3.0f) < 0.01f;
+  EXPECT_GE(wall_far, wall_without * 99 / 100);
 }
 
 // 20 scans of a plane from different origins, Gaussian range noise of 1 cm along the beam: the

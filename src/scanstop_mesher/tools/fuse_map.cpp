@@ -1,4 +1,4 @@
-/// fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--splat n] [--min-weight w]
+/// fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--carve-far] [--splat n] [--min-weight w]
 ///          [--mesh marching_cubes|points|bpa] [--radii r1,...] [--vdb FILE] [--json] [--skip-bad]
 /// Integrates every scan of a map directory into the fused TSDF map (fused_map.h) and writes its
 /// surface: Marching Cubes of the field, the fused surface points with normals, or Ball Pivoting of
@@ -23,7 +23,8 @@ using namespace scanstop::mesher;
 namespace {
 
 constexpr const char* kUsage =
-    "usage: fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--splat n] [--min-weight w]\n"
+    "usage: fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--carve-far] [--splat n] [--min-weight "
+    "w]\n"
     "                [--max-grid-mb MB] [--mesh marching_cubes|points|bpa] [--radii r1,r2,...] [--vdb FILE] [--json]\n"
     "                [--skip-bad]\n"
     "  MAP_DIR       a map directory (poses.csv + scans/)\n"
@@ -33,6 +34,8 @@ constexpr const char* kUsage =
     "                (default 3 voxels: 0.06 at the default voxel)\n"
     "  --carve       free space carved before the band along each beam [m], [0, 1000]; 0 = none\n"
     "                (default 1000: the whole beam)\n"
+    "  --carve-far   with --carve below 1000: carve the rest of each beam too, in a second pass over the\n"
+    "                scans, in the voxels near some surface only (as the whole beam does there, cheaper)\n"
     "  --splat       lateral reach of each reading's band [voxels], [0, 3] (default 0: the crossed voxels;\n"
     "                1: 3 x 3 voxels across the beam, for beams up to 3 voxels apart, less accurate)\n"
     "  --min-weight  readings a voxel needs to count as seen, [1, 10000] (default 2)\n"
@@ -65,6 +68,7 @@ int main(int argc, char** argv) {
       .real("--voxel", config.voxel_m, 0.001, 1.0)
       .real("--truncation", truncation, 0.002, 1.0)
       .real("--carve", config.carve_m, 0.0, 1000.0)
+      .flag("--carve-far", config.carve_far)
       .integer("--splat", config.splat, 0, 3)
       .real("--min-weight", config.min_weight, 1.0, 10000.0)
       .real("--max-grid-mb", config.max_grid_mb, 1.0, 1e6)

@@ -53,6 +53,9 @@ struct MesherNodeConfig {
   std::string mesh_method = "marching_cubes";
   double fused_voxel_m = 0.02;  ///< voxel of the fused map [m], [0.005, 0.5]
   double fused_carve_m = 0.2;   ///< free space carved before each hit along its beam [m], [0, 1000]
+  /// ... and the rest of each beam in the voxels near some surface (FusedMapConfig::carve_far): removes
+  /// the surfaces other scans see through from afar (a retroreflective leg's pillar, mixed pixels).
+  bool fused_carve_far = true;
   /// Bound on the fused map's grids [MB], [1, 1e6]: a map whose fused grids would need more is fused
   /// again at 1.5 times the voxel, up to 4 times fused_voxel_m, and beyond that meshed by Ball
   /// Pivoting of its points (a WARN and the response's message say which).

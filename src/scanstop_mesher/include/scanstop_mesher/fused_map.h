@@ -72,6 +72,12 @@ struct FusedMapConfig {
   /// centred at x = i * voxel_m): one slab of a map too large for max_grid_mb as a whole
   /// (meshFusedMapDirectory). Each voxel inside gets exactly the updates it gets without the clip,
   /// in the same order. Default: every voxel.
+  /// After carve_m: integrateMapDirectory carves every beam's free space before carve_m as well (a
+  /// second pass, FusedMap::carveFar), in the voxels that exist by then (near some surface) only:
+  /// what whole-beam carving does to the surfaces (it removes a surface that other scans see through
+  /// from afar: the 10 cm "pillar" round a retroreflective table leg, mixed pixels behind edges) at a
+  /// fraction of its cost, as the beam skips the space where no voxel exists leaf by leaf.
+  bool carve_far = false;
   int clip_x_min_voxel = std::numeric_limits<int>::min();
   int clip_x_max_voxel = std::numeric_limits<int>::max();
   /// Throws ConfigError naming the field, its value and the allowed range.
@@ -105,6 +111,12 @@ class FusedMap {
   /// ConfigError when the origin is not finite, or when the grids would pass max_grid_mb (the scan is
   /// then partly integrated: discard the map). Returns the number of points integrated.
   size_t integrate(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin);
+
+  /// FusedMapConfig::carve_far's second pass for one scan (integrated before, with every other scan):
+  /// each beam's voxels farther than truncation_m + carve_m before its hit that exist already get a
+  /// free (+truncation_m) update, as integrate() gives the voxels within carve_m; no voxel is created.
+  /// Returns the voxels updated. Throws ConfigError for an origin that is not finite.
+  size_t carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin);
 
   /// Points on the zero crossing, one per surface cell (all 8 corners observed, a sign change):
   /// the mean of the cell's edge crossings (linear interpolation along the edges), moved onto the
