@@ -438,7 +438,8 @@ TEST(FusedMap, AMapTooLargeForTheGridsIsMeshedInSlabsWithTheSameMesh) {
   test::writeRoomMap(tmp.path + "/map");
   FusedMapConfig config;
   config.carve_m = 0.2;
-  config.voxel_m = 0.01;  // a few MB of grids, so that a bound in whole MB splits them
+  config.carve_far = true;  // as bpa_mesher_node fuses
+  config.voxel_m = 0.01;    // a few MB of grids, so that a bound in whole MB splits them
   config.truncation_m = 0.03;
   const FusedMesh whole = meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig());
   ASSERT_EQ(whole.slabs, 1u);
