@@ -40,6 +40,40 @@ double elapsed(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+/// Amanatides-Woo over the unit cells of q from q = a to q = b: visit(cell, s0, s1) for each cell the
+/// segment crosses, [s0, s1] the segment's parameter range in it (0 at a, 1 at b), in order.
+template <class Visit>
+void walkCells(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Visit visit) {
+  const Eigen::Vector3d d = b - a;
+  Eigen::Vector3i cell(static_cast<int>(std::floor(a.x())), static_cast<int>(std::floor(a.y())),
+                       static_cast<int>(std::floor(a.z())));
+  const Eigen::Vector3i end(static_cast<int>(std::floor(b.x())), static_cast<int>(std::floor(b.y())),
+                            static_cast<int>(std::floor(b.z())));
+  Eigen::Vector3i step;
+  Eigen::Vector3d t_max, t_delta;
+  for (int k = 0; k < 3; ++k) {
+    step[k] = d[k] > 0 ? 1 : -1;
+    if (std::abs(d[k]) < 1e-12) {
+      t_max[k] = t_delta[k] = INFINITY;
+    } else {
+      t_delta[k] = 1.0 / std::abs(d[k]);
+      t_max[k] = ((d[k] > 0 ? cell[k] + 1 : cell[k]) - a[k]) / d[k];
+    }
+  }
+  const long max_steps = (end - cell).cwiseAbs().sum() + 4;
+  double s = 0.0;
+  for (long n = 0; n <= max_steps; ++n) {
+    int k = 0;
+    if (t_max[1] < t_max[k]) k = 1;
+    if (t_max[2] < t_max[k]) k = 2;
+    visit(cell, s, std::min(1.0, t_max[k]));
+    if (cell == end || t_max[k] > 1.0) break;
+    s = t_max[k];
+    cell[k] += step[k];
+    t_max[k] += t_delta[k];
+  }
+}
+
 /// The 8 corner values of the cell between voxels c and c + (1,1,1); corner index bits: x = 1,
 /// y = 2, z = 4. False when a corner is not observed.
 bool loadCell(const ConstAccessor& tsdf, const ConstAccessor& weight, const Coord& c, float min_weight, float v[8]) {
@@ -216,36 +250,11 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
     // Amanatides-Woo traversal in u = x / voxel + 0.5, where voxel(u) = floor(u).
     const Eigen::Vector3d a = (o + t0_beam * dir) / vs + Eigen::Vector3d::Constant(0.5);
     const Eigen::Vector3d b = (o + t1_beam * dir) / vs + Eigen::Vector3d::Constant(0.5);
-    const Eigen::Vector3d d = b - a;
-    Eigen::Vector3i ijk(static_cast<int>(std::floor(a.x())), static_cast<int>(std::floor(a.y())),
-                        static_cast<int>(std::floor(a.z())));
-    const Eigen::Vector3i end(static_cast<int>(std::floor(b.x())), static_cast<int>(std::floor(b.y())),
-                              static_cast<int>(std::floor(b.z())));
-    Eigen::Vector3i step;
-    Eigen::Vector3d t_max, t_delta;
-    for (int k = 0; k < 3; ++k) {
-      step[k] = d[k] > 0 ? 1 : -1;
-      if (std::abs(d[k]) < 1e-12) {
-        t_max[k] = t_delta[k] = INFINITY;
-      } else {
-        t_delta[k] = 1.0 / std::abs(d[k]);
-        t_max[k] = ((d[k] > 0 ? ijk[k] + 1 : ijk[k]) - a[k]) / d[k];
-      }
-    }
-    const long max_steps = (end - ijk).cwiseAbs().sum() + 4;
-    for (long s = 0; s <= max_steps; ++s) {
-      const Eigen::Vector3d centre = ijk.cast<double>() * vs;
-      const double sdf = r - (centre - o).dot(dir);  // along the beam, positive in front of the hit
+    walkCells(a, b, [&](const Eigen::Vector3i& ijk, double, double) {
+      const double sdf = r - (ijk.cast<double>() * vs - o).dot(dir);  // along the beam, positive in front of the hit
       // With splat the band is done above: here only the free part.
       if (sdf >= -trunc && (splat == 0 || sdf > trunc)) update(Coord(ijk.x(), ijk.y(), ijk.z()), sdf);
-      if (ijk == end) break;
-      int k = 0;
-      if (t_max[1] < t_max[k]) k = 1;
-      if (t_max[2] < t_max[k]) k = 2;
-      if (t_max[k] > 1.0) break;
-      ijk[k] += step[k];
-      t_max[k] += t_delta[k];
-    }
+    });
   }
   ++stats_.scans;
   stats_.points += used;
@@ -253,42 +262,6 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
   stats_.integrate_seconds += elapsed(t0);
   return used;
 }
-
-namespace {
-/// Amanatides-Woo over the unit cells of q from q = a to q = b: visit(cell, s0, s1) for each cell the
-/// segment crosses, [s0, s1] the segment's parameter range in it (0 at a, 1 at b), in order.
-template <class Visit>
-void walkCells(const Eigen::Vector3d& a, const Eigen::Vector3d& b, Visit visit) {
-  const Eigen::Vector3d d = b - a;
-  Eigen::Vector3i cell(static_cast<int>(std::floor(a.x())), static_cast<int>(std::floor(a.y())),
-                       static_cast<int>(std::floor(a.z())));
-  const Eigen::Vector3i end(static_cast<int>(std::floor(b.x())), static_cast<int>(std::floor(b.y())),
-                            static_cast<int>(std::floor(b.z())));
-  Eigen::Vector3i step;
-  Eigen::Vector3d t_max, t_delta;
-  for (int k = 0; k < 3; ++k) {
-    step[k] = d[k] > 0 ? 1 : -1;
-    if (std::abs(d[k]) < 1e-12) {
-      t_max[k] = t_delta[k] = INFINITY;
-    } else {
-      t_delta[k] = 1.0 / std::abs(d[k]);
-      t_max[k] = ((d[k] > 0 ? cell[k] + 1 : cell[k]) - a[k]) / d[k];
-    }
-  }
-  const long max_steps = (end - cell).cwiseAbs().sum() + 4;
-  double s = 0.0;
-  for (long n = 0; n <= max_steps; ++n) {
-    int k = 0;
-    if (t_max[1] < t_max[k]) k = 1;
-    if (t_max[2] < t_max[k]) k = 2;
-    visit(cell, s, std::min(1.0, t_max[k]));
-    if (cell == end || t_max[k] > 1.0) break;
-    s = t_max[k];
-    cell[k] += step[k];
-    t_max[k] += t_delta[k];
-  }
-}
-}  // namespace
 
 size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
   if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
