@@ -514,7 +514,8 @@ namespace {
 /// The x range [m] of a map directory's readings at their map poses (scans that cannot be read are
 /// skipped here: integrateMapDirectory names them).
 std::pair<double, double> mapXRange(const std::string& dir) {
-  const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, nullptr);
+  std::vector<std::string> named_by_the_passes;
+  const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, &named_by_the_passes);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (size_t s = 0; s < opened->size(); ++s) {
     PointCloud scan;
@@ -557,10 +558,12 @@ FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, cons
     slab.clip_x_min_voxel = a - 1;
     slab.clip_x_max_voxel = b + 2;
     FusedMap fused(slab);
-    std::vector<std::string> later;  // every pass names the same skipped scans: the first one says it
+    std::vector<std::string> later;  // every pass names the same skipped scans: the first whole one says it
+    const size_t named = skipped ? skipped->size() : 0;
     try {
       out.scans = integrateMapDirectory(fused, dir, first_pass ? skipped : (skipped ? &later : nullptr));
     } catch (const GridBoundError& e) {
+      if (skipped) skipped->resize(named);  // a pass that stopped at the bound: the next one names them
       if (b - a < 2 * min_cells)
         throw GridBoundError(std::string(e.what()) + " (in a slab of " + std::to_string((b - a) * vs) + " m along x)");
       build(a, a + (b - a) / 2);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <random>
 #include <string>
@@ -444,6 +445,8 @@ TEST(FusedMap, AMapTooLargeForTheGridsIsMeshedInSlabsWithTheSameMesh) {
   const FusedMesh whole = meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig());
   ASSERT_EQ(whole.slabs, 1u);
   config.max_grid_mb = 0.45 * whole.memory_bytes / 1048576.0;
+  FusedMapConfig slab_config = config;
+  slab_config.max_grid_mb = 0.25 * whole.memory_bytes / 1048576.0;  // one scan of the room needs slabs too
   const FusedMesh slabs = meshFusedMapDirectory(tmp.path + "/map", config, "marching_cubes", MesherConfig(), nullptr,
                                                 tmp.path + "/fused_map.vdb", 0.2);
   EXPECT_GE(slabs.slabs, 3u);
@@ -474,4 +477,16 @@ TEST(FusedMap, AMapTooLargeForTheGridsIsMeshedInSlabsWithTheSameMesh) {
   } catch (const GridBoundError& e) {
     EXPECT_NE(std::string(e.what()).find("in a slab of"), std::string::npos) << e.what();
   }
+  // A scan that cannot be read: skipped (with skipped given) and named once, however many passes.
+  {
+    std::ofstream bad(tmp.path + "/map/scans/scan_0001.pcd", std::ios::trunc);
+    bad << "not a point cloud\n";
+  }
+  std::vector<std::string> skipped;
+  const FusedMesh rest =
+      meshFusedMapDirectory(tmp.path + "/map", slab_config, "marching_cubes", MesherConfig(), &skipped, "", 0.2);
+  EXPECT_GE(rest.slabs, 2u);
+  EXPECT_EQ(rest.scans, 1u);
+  ASSERT_EQ(skipped.size(), 1u);
+  EXPECT_NE(skipped[0].find("scan 1 skipped"), std::string::npos) << skipped[0];
 }
