@@ -14,6 +14,7 @@
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/ros/msg_conversion.h"
 #include "scanstop_common/ros/params.h"
+#include "scanstop_mesher/decimate.h"
 #include "scanstop_mesher/fused_map.h"
 
 namespace scanstop {
@@ -53,6 +54,7 @@ void MesherNodeConfig::validate() const {
   requireInRange("fused_voxel_m", fused_voxel_m, 0.005, 0.5, "m");
   requireInRange("fused_carve_m", fused_carve_m, 0.0, 1000.0, "m");
   requireInRange("fused_max_grid_mb", fused_max_grid_mb, 1.0, 1e6, "MB");
+  requireInRange("mesh_decimate_error_m", mesh_decimate_error_m, 0.0, 0.1, "m");
   if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
   if (require_map && map_dir.empty()) throw ConfigError("parameter 'require_map' is true but 'map_dir' is empty");
   if (!default_output.empty()) {
@@ -103,6 +105,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   params.optional("fused_carve_far", c.fused_carve_far);
   params.optional("fused_max_grid_mb", c.fused_max_grid_mb);
   params.optional("fused_map_output", c.fused_map_output);
+  params.optional("mesh_decimate_error_m", c.mesh_decimate_error_m);
   params.rejectUnknown();
   c.validate();
   if (c.require_map) requireMapDirectory(c.map_dir);
@@ -295,6 +298,14 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
     ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", r.save_problem.c_str());
     skipped.push_back("the fused map was not saved: " + r.save_problem);
   }
+  std::ostringstream decimated;
+  if (config_.mesh_method == "marching_cubes" && config_.mesh_decimate_error_m > 0.0) {
+    DecimateConfig dc;
+    dc.max_error_m = config_.mesh_decimate_error_m;
+    const DecimateStats d = decimateMesh(r.mesh, dc);
+    decimated << "; decimated from " << d.faces_before << " within " << dc.max_error_m * 1000.0 << " mm in "
+              << d.seconds << " s";
+  }
   PointCloud surface;
   for (const Eigen::Vector3f& p : r.surface)
     if (p.z() <= config_.display_max_z_m) surface.points.push_back(p);  // the ceiling cut away for the view
@@ -303,7 +314,8 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   std::ostringstream msg;
   msg << r.mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << r.scans
       << " scans of map " << config_.map_dir << " (voxel " << fc.voxel_m << " m, " << r.voxels << " voxels, "
-      << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s; "
+      << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s"
+      << decimated.str() << "; "
       << (r.slabs > 1 ? std::string("built in ") + std::to_string(r.slabs) +
                             " slabs along x, the largest within fused_max_grid_mb: no .vdb of the whole"
           : r.save_problem.empty() ? "fused map in " + vdb

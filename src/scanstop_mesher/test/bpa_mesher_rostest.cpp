@@ -183,9 +183,17 @@ TEST(BpaMesherNode, AFusedMethodKeepsTheFusedMapWithTheRunAndShowsItsSurface) {
   srv.request.output_path = g_map_dir + "/fused_mesh.ply";
   ASSERT_TRUE(client.call(srv));
   ASSERT_TRUE(srv.response.success) << srv.response.message;
-  EXPECT_GT(srv.response.triangles, 2000u);
+  EXPECT_GT(srv.response.triangles, 200u);
   EXPECT_NE(srv.response.message.find("fused map in " + g_map_dir + "/fused_map.vdb"), std::string::npos)
       << srv.response.message;
+  // The Marching Cubes mesh decimated within mesh_decimate_error_m (2 mm): the synthetic room's flat
+  // walls and box keep under half of their triangles (3,118 of 10,378 measured at the 0.04 m voxel).
+  const size_t at = srv.response.message.find("decimated from ");
+  ASSERT_NE(at, std::string::npos) << srv.response.message;
+  const unsigned long before = std::stoul(srv.response.message.substr(at + 15));
+  EXPECT_NE(srv.response.message.find(" within 2 mm in "), std::string::npos) << srv.response.message;
+  EXPECT_LT(srv.response.triangles * 2ul, before) << srv.response.message;
+  EXPECT_EQ(readMesh(g_map_dir + "/fused_mesh.ply").faces.size(), srv.response.triangles);
   struct stat st;
   ASSERT_EQ(::stat((g_map_dir + "/fused_map.vdb").c_str(), &st), 0) << "no fused_map.vdb beside the mesh";
   EXPECT_GT(st.st_size, 10000);
@@ -222,7 +230,7 @@ TEST(BpaMesherNode, AMapTooLargeForTheFusedGridsIsBuiltInSlabsOrCoarserOrMeshedB
     return srv.response;
   };
   const scanstop_msgs::BuildMesh::Response slabs = build("slabs");
-  EXPECT_GT(slabs.triangles, 2000u);
+  EXPECT_GT(slabs.triangles, 500u);
   EXPECT_NE(slabs.message.find("by marching_cubes of the fused map"), std::string::npos) << slabs.message;
   EXPECT_NE(slabs.message.find("(voxel 0.02 m"), std::string::npos) << slabs.message;
   EXPECT_NE(slabs.message.find(" slabs along x, the largest within fused_max_grid_mb"), std::string::npos)

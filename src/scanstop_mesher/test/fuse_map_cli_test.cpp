@@ -36,7 +36,7 @@ using test::writeRoomMap;
 TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
   TempDir tmp("fuse_map_cli_test");
   writeRoomMap(tmp.path + "/map");
-  CliRun r = run(tmp.path + "/map " + tmp.path + "/mc.ply --json --vdb " + tmp.path + "/map.vdb");
+  CliRun r = run(tmp.path + "/map " + tmp.path + "/mc.ply --decimate 0 --json --vdb " + tmp.path + "/map.vdb");
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << "one line: " << r.out;
   EXPECT_EQ(jsonValue(r.out, "scans"), 2);
@@ -74,6 +74,27 @@ TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
   EXPECT_LT(worst, 0.03f);
   std::ifstream vdb(tmp.path + "/map.vdb", std::ios::binary | std::ios::ate);
   EXPECT_GT(static_cast<long>(vdb.tellg()), 100000);
+
+  // By default the mesh is decimated within 2 mm: far fewer triangles on the room's flat faces, the
+  // vertices still on them.
+  r = run(tmp.path + "/map " + tmp.path + "/decimated.ply --json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(jsonValue(r.out, "decimated_from"), triangles);
+  const TriangleMesh dec = readMesh(tmp.path + "/decimated.ply");
+  EXPECT_EQ(static_cast<double>(dec.faces.size()), jsonValue(r.out, "triangles"));
+  EXPECT_LT(static_cast<double>(dec.faces.size()), triangles / 5);
+  EXPECT_EQ(jsonValue(r.out, "nonmanifold_edges"), 0);
+  size_t dec_off = 0;
+  for (const auto& v : dec.vertices) {
+    float d = 1e9f;
+    for (int a = 0; a < 3; ++a) d = std::min({d, std::abs(v[a] - room.lo[a]), std::abs(v[a] - room.hi[a])});
+    const Eigen::Vector3f q = v.cwiseMax(box.lo).cwiseMin(box.hi);
+    d = std::min(d, (q - v).norm());
+    dec_off += d > 0.02f;
+  }
+  std::printf("decimated: %zu of %zu triangles; %zu of %zu vertices more than 2 cm off the room\n", dec.faces.size(),
+              static_cast<size_t>(triangles), dec_off, dec.vertices.size());
+  EXPECT_LT(dec_off, dec.vertices.size() / 200);
 
   r = run(tmp.path + "/map " + tmp.path + "/points.ply --mesh points");
   ASSERT_EQ(r.status, 0) << r.out;

@@ -1,5 +1,5 @@
 /// fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--carve-far] [--splat n] [--min-weight w]
-///          [--mesh marching_cubes|points|bpa] [--radii r1,...] [--vdb FILE] [--json] [--skip-bad]
+///          [--mesh marching_cubes|points|bpa] [--decimate m] [--radii r1,...] [--vdb FILE] [--json] [--skip-bad]
 /// Integrates every scan of a map directory into the fused TSDF map (fused_map.h) and writes its
 /// surface: Marching Cubes of the field, the fused surface points with normals, or Ball Pivoting of
 /// those points.
@@ -14,6 +14,7 @@
 #include "scanstop_common/error.h"
 #include "scanstop_common/file_util.h"
 #include "scanstop_common/options.h"
+#include "scanstop_mesher/decimate.h"
 #include "scanstop_mesher/fused_map.h"
 #include "scanstop_mesher/mesher.h"
 
@@ -25,8 +26,8 @@ namespace {
 constexpr const char* kUsage =
     "usage: fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--carve-far] [--splat n] [--min-weight "
     "w]\n"
-    "                [--max-grid-mb MB] [--mesh marching_cubes|points|bpa] [--radii r1,r2,...] [--vdb FILE] [--json]\n"
-    "                [--skip-bad]\n"
+    "                [--max-grid-mb MB] [--mesh marching_cubes|points|bpa] [--decimate m] [--radii r1,r2,...]\n"
+    "                [--vdb FILE] [--json] [--skip-bad]\n"
     "  MAP_DIR       a map directory (poses.csv + scans/)\n"
     "  OUTPUT        .stl or .ply for a mesh; .ply, .pcd or .xyz for --mesh points; its directory must exist\n"
     "  --voxel       voxel edge [m], [0.001, 1] (default 0.02)\n"
@@ -43,6 +44,8 @@ constexpr const char* kUsage =
     "                500): a voxel too fine for the map ends at once instead of filling the machine's memory\n"
     "  --mesh        marching_cubes (default): volumeToMesh of the field; points: the fused surface points\n"
     "                with normals; bpa: Ball Pivoting of those points\n"
+    "  --decimate    decimate the Marching Cubes mesh within this error [m], [0, 0.1] (default 0.002, as\n"
+    "                bpa_mesher_node; 0: none): quadric edge collapse, holes and outline kept\n"
     "  --radii       ball radii for --mesh bpa [m] (default: automatic from the point spacing)\n"
     "  --vdb         also write the fused grids (tsdf, weight) as an OpenVDB file\n"
     "  --json        print the result as one JSON object\n"
@@ -61,6 +64,7 @@ int main(int argc, char** argv) {
   FusedMapConfig config;
   double truncation = -1.0;
   MesherConfig bpa_config;
+  DecimateConfig decimate;
   bool json = false, skip_bad = false;
   Options opts("fuse_map", kUsage);
   opts.positional("MAP_DIR", map_dir)
@@ -73,6 +77,7 @@ int main(int argc, char** argv) {
       .real("--min-weight", config.min_weight, 1.0, 10000.0)
       .real("--max-grid-mb", config.max_grid_mb, 1.0, 1e6)
       .choice("--mesh", mode, {"marching_cubes", "points", "bpa"})
+      .real("--decimate", decimate.max_error_m, 0.0, 0.1)
       .custom("--radii", [&](const std::string& v) { bpa_config.radii_m = parseRadii(v); })
       .text("--vdb", vdb)
       .flag("--json", json)
@@ -109,8 +114,10 @@ int main(int argc, char** argv) {
     const auto t_mesh = std::chrono::steady_clock::now();
     size_t surface_points = 0;
     TriangleMesh mesh;
+    DecimateStats decimated;
     if (mode == "marching_cubes") {
       mesh = fused.extractMesh();
+      decimated = decimateMesh(mesh, decimate);
     } else {
       ScanPoints sp = fused.surfacePoints();
       surface_points = sp.size();
@@ -142,8 +149,10 @@ int main(int argc, char** argv) {
                 << ", \"memory_bytes\": " << fused.memoryBytes() << ", \"voxel_updates\": " << st.voxel_updates
                 << ", \"integrate_seconds\": " << jsonNumber(st.integrate_seconds)
                 << ", \"mesh_seconds\": " << jsonNumber(mesh_seconds) << ", \"surface_points\": " << surface_points
-                << ", \"triangles\": " << t.faces << ", \"vertices\": " << t.vertices
-                << ", \"boundary_edges\": " << t.boundary_edges << ", \"nonmanifold_edges\": " << t.nonmanifold_edges
+                << ", \"decimated_from\": " << decimated.faces_before
+                << ", \"decimate_seconds\": " << jsonNumber(decimated.seconds) << ", \"triangles\": " << t.faces
+                << ", \"vertices\": " << t.vertices << ", \"boundary_edges\": " << t.boundary_edges
+                << ", \"nonmanifold_edges\": " << t.nonmanifold_edges
                 << ", \"nonmanifold_vertices\": " << t.nonmanifold_vertices << ", \"components\": " << t.components
                 << "}" << std::endl;
     } else {
@@ -159,6 +168,9 @@ int main(int argc, char** argv) {
         std::cout << "mesh:         " << mode << ", " << t.faces << " triangles, " << t.vertices << " vertices, "
                   << t.components << " components, " << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges
                   << " non-manifold edges, " << t.nonmanifold_vertices << " non-manifold vertices\n";
+      if (decimated.collapses > 0)
+        std::cout << "decimated:    from " << decimated.faces_before << " triangles within " << decimate.max_error_m
+                  << " m in " << decimated.seconds << " s\n";
       std::cout << "meshing:      " << mesh_seconds << " s\n"
                 << "written:      " << output << (vdb.empty() ? "" : " and " + vdb) << std::endl;
     }

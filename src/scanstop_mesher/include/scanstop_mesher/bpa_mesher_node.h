@@ -60,6 +60,9 @@ struct MesherNodeConfig {
   /// again at 1.5 times the voxel, up to 4 times fused_voxel_m, and beyond that meshed by Ball
   /// Pivoting of its points (a WARN and the response's message say which).
   double fused_max_grid_mb = 1000.0;
+  /// Bound on the error of the Marching Cubes mesh's decimation [m], [0, 0.1]; 0: none (decimate.h:
+  /// the root mean square distance of a merged vertex to the planes of the faces it replaces).
+  double mesh_decimate_error_m = 0.002;
   /// Where a fused mesh_method writes the fused map (OpenVDB .vdb); "": fused_map.vdb beside the mesh.
   std::string fused_map_output;
   void validate() const;
