@@ -54,6 +54,7 @@ void MesherNodeConfig::validate() const {
   requireInRange("fused_voxel_m", fused_voxel_m, 0.005, 0.5, "m");
   requireInRange("fused_carve_m", fused_carve_m, 0.0, 1000.0, "m");
   requireInRange("fused_max_grid_mb", fused_max_grid_mb, 1.0, 1e6, "MB");
+  requireInRange("fused_threads", fused_threads, 1, 16);
   requireInRange("mesh_decimate_error_m", mesh_decimate_error_m, 0.0, 0.1, "m");
   if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
   if (require_map && map_dir.empty()) throw ConfigError("parameter 'require_map' is true but 'map_dir' is empty");
@@ -104,6 +105,7 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   params.optional("fused_carve_m", c.fused_carve_m);
   params.optional("fused_carve_far", c.fused_carve_far);
   params.optional("fused_max_grid_mb", c.fused_max_grid_mb);
+  params.optional("fused_threads", c.fused_threads);
   params.optional("fused_map_output", c.fused_map_output);
   params.optional("mesh_decimate_error_m", c.mesh_decimate_error_m);
   params.rejectUnknown();
@@ -253,6 +255,7 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   fc.carve_m = config_.fused_carve_m;
   fc.carve_far = config_.fused_carve_far;
   fc.max_grid_mb = config_.fused_max_grid_mb;
+  fc.threads = config_.fused_threads;
   std::vector<std::string> skipped;
   // The fused map is kept with the run: beside the mesh unless fused_map_output says where.
   const std::string vdb = !config_.fused_map_output.empty()

@@ -5,11 +5,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <unordered_map>
 #include <utility>
 
@@ -35,6 +37,7 @@ namespace {
 
 using Coord = openvdb::Coord;
 using ConstAccessor = openvdb::FloatGrid::ConstAccessor;
+using Leaf = openvdb::FloatTree::LeafNodeType;
 
 double elapsed(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -148,6 +151,7 @@ void FusedMapConfig::validate() const {
   requireInRange("max_weight", max_weight, 1.0, 1e6);
   requireInRange("min_weight", min_weight, 1.0, max_weight);
   requireInRange("max_grid_mb", max_grid_mb, 1.0, 1e6, "MB");
+  requireInRange("threads", threads, 1, 16);
   if (clip_x_min_voxel > clip_x_max_voxel)
     throw ConfigError("clip_x_min_voxel = " + std::to_string(clip_x_min_voxel) +
                       " is above clip_x_max_voxel = " + std::to_string(clip_x_max_voxel));
@@ -181,10 +185,13 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
   size_t used = 0, updates = 0;
   const int clip_lo = config_.clip_x_min_voxel, clip_hi = config_.clip_x_max_voxel;
   const bool clipped = clip_lo != std::numeric_limits<int>::min() || clip_hi != std::numeric_limits<int>::max();
-  // Both grids get a leaf node at the same place: the bound counts their leaves as they are allocated.
-  using Leaf = openvdb::FloatTree::LeafNodeType;  // the node and its separately allocated voxel buffer
+  // Both grids get a leaf node at the same place: the bound counts their leaves as they are allocated
+  // (a Leaf: the node and its separately allocated voxel buffer).
   const double leaf_bytes = 2.0 * (sizeof(Leaf) + Leaf::SIZE * sizeof(float));
-  const size_t max_leaves = static_cast<size_t>(config_.max_grid_mb * 1048576.0 / leaf_bytes);
+  const size_t max_leaves = static_cast<size_t>(bound_share_ * config_.max_grid_mb * 1048576.0 / leaf_bytes);
+  Leaf* tsdf_leaf = nullptr;
+  Leaf* weight_leaf = nullptr;
+  Coord cached_origin(std::numeric_limits<int>::min(), 0, 0);  // no leaf's origin (those are multiples of 8)
   for (const Eigen::Vector3f& pf : points) {
     if (!pf.allFinite()) {
       ++stats_.skipped_points;
@@ -208,18 +215,28 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
     const auto update = [&](const Coord& c, double sdf) {
       if (c.x() < clip_lo || c.x() > clip_hi) return;                // another slab's voxel
       const float value = static_cast<float>(std::min(sdf, trunc));  // before the band: free (+trunc)
-      const float w = weight.getValue(c);
-      if (w == 0.0f && !weight.probeConstLeaf(c) && ++stats_.leaves_created > max_leaves) {
-        std::ostringstream o;
-        o << "the fused map's grids passed max_grid_mb = " << config_.max_grid_mb << " MB (" << stats_.leaves_created
-          << " leaf nodes of 8^3 voxels) after " << used << " of scan " << stats_.scans + 1 << "'s " << points.size()
-          << " readings: voxel_m = " << config_.voxel_m
-          << " m is too fine for the mapped space; use a larger voxel (default 0.02 m) or raise max_grid_mb";
-        throw GridBoundError(o.str());
+      // The voxels of a beam come leaf by leaf: the two leaves' buffers directly while in one
+      // (the accessors' lookups per voxel took most of the integration's time).
+      const Coord leaf_origin(c.x() & ~7, c.y() & ~7, c.z() & ~7);
+      if (leaf_origin != cached_origin) {
+        weight_leaf = weight.probeLeaf(c);
+        if (!weight_leaf && ++stats_.leaves_created > max_leaves) {
+          std::ostringstream o;
+          o << "the fused map's grids passed max_grid_mb = " << config_.max_grid_mb << " MB (" << stats_.leaves_created
+            << " leaf nodes of 8^3 voxels) after " << used << " of scan " << stats_.scans + 1 << "'s " << points.size()
+            << " readings: voxel_m = " << config_.voxel_m
+            << " m is too fine for the mapped space; use a larger voxel (default 0.02 m) or raise max_grid_mb";
+          throw GridBoundError(o.str());
+        }
+        if (!weight_leaf) weight_leaf = weight.touchLeaf(c);
+        tsdf_leaf = tsdf.touchLeaf(c);
+        cached_origin = leaf_origin;
       }
-      const float D = w > 0.0f ? tsdf.getValue(c) : 0.0f;
-      tsdf.setValue(c, (D * w + value) / (w + 1.0f));
-      weight.setValue(c, std::min(w + 1.0f, max_w));
+      const openvdb::Index at = Leaf::coordToOffset(c);
+      const float w = weight_leaf->getValue(at);
+      const float D = w > 0.0f ? tsdf_leaf->getValue(at) : 0.0f;
+      tsdf_leaf->setValueOn(at, (D * w + value) / (w + 1.0f));
+      weight_leaf->setValueOn(at, std::min(w + 1.0f, max_w));
       ++updates;
     };
     if (splat > 0) {
@@ -263,14 +280,17 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
   return used;
 }
 
-size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
-  if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
-  const auto t0 = std::chrono::steady_clock::now();
-  openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
-  openvdb::FloatGrid::Accessor weight = grids_->weight->getAccessor();
-  const double vs = config_.voxel_m, trunc = config_.truncation_m, near = trunc + config_.carve_m;
-  const float max_w = static_cast<float>(config_.max_weight), free_value = static_cast<float>(trunc);
-  const int clip_lo = config_.clip_x_min_voxel, clip_hi = config_.clip_x_max_voxel;
+namespace {
+
+/// The far carving pass's walk of one scan (FusedMapConfig::carve_far): for every voxel farther than
+/// truncation_m + carve_m before a beam's hit that exists in `weight` (weight above 0), in its slab,
+/// apply(leaf origin, offset in the leaf). Beams skip the leaves that do not exist. Returns the calls.
+template <class Apply>
+size_t walkFar(const openvdb::FloatGrid& weight_grid, const FusedMapConfig& config,
+               const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, Apply apply) {
+  ConstAccessor weight = weight_grid.getConstAccessor();
+  const double vs = config.voxel_m, near = config.truncation_m + config.carve_m;
+  const int clip_lo = config.clip_x_min_voxel, clip_hi = config.clip_x_max_voxel;
   const Eigen::Vector3d o = origin.cast<double>();
   const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.5);
   size_t updates = 0;
@@ -284,24 +304,98 @@ size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eige
     // In voxel units u = x / voxel + 0.5 (voxel(u) = floor(u)); leaves are 8 voxels: floor(u / 8).
     const Eigen::Vector3d ua = o / vs + half, ub = (o + (r - near) * dir) / vs + half;
     walkCells(ua / kLeaf, ub / kLeaf, [&](const Eigen::Vector3i& leaf, double s0, double s1) {
-      if (!weight.probeConstLeaf(Coord(leaf.x() * kLeaf, leaf.y() * kLeaf, leaf.z() * kLeaf))) return;
+      const Coord leaf_origin(leaf.x() * kLeaf, leaf.y() * kLeaf, leaf.z() * kLeaf);
+      const Leaf* const weight_leaf = weight.probeConstLeaf(leaf_origin);
+      if (!weight_leaf) return;
       walkCells(ua + s0 * (ub - ua), ua + s1 * (ub - ua), [&](const Eigen::Vector3i& v, double, double) {
         if (v.x() < clip_lo || v.x() > clip_hi) return;
         if (Eigen::Vector3i(v.x() >> 3, v.y() >> 3, v.z() >> 3) != leaf) return;  // the next leaf's: its own turn
-        const Coord c(v.x(), v.y(), v.z());
-        const float w = weight.getValue(c);
-        if (w == 0.0f) return;                                         // no voxel here: none is made
+        const openvdb::Index at = Leaf::coordToOffset(Coord(v.x(), v.y(), v.z()));
+        if (weight_leaf->getValue(at) == 0.0f) return;                 // no voxel here: none is made
         if (r - (v.cast<double>() * vs - o).dot(dir) <= near) return;  // integrate() carved it
-        const float D = tsdf.getValue(c);
-        tsdf.setValue(c, (D * w + free_value) / (w + 1.0f));
-        weight.setValue(c, std::min(w + 1.0f, max_w));
+        apply(leaf_origin, at);
         ++updates;
       });
     });
   }
+  return updates;
+}
+
+/// n free (+truncation) updates of a voxel at once: the running average's n steps in one.
+inline void freeUpdates(Leaf* tsdf_leaf, Leaf* weight_leaf, openvdb::Index at, float n, float free_value, float max_w) {
+  const float w = weight_leaf->getValue(at);
+  const float D = tsdf_leaf->getValue(at);
+  tsdf_leaf->setValueOn(at, (D * w + free_value * n) / (w + n));
+  weight_leaf->setValueOn(at, std::min(w + n, max_w));
+}
+
+}  // namespace
+
+size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
+  if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
+  const auto t0 = std::chrono::steady_clock::now();
+  openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
+  openvdb::FloatGrid::Accessor weight = grids_->weight->getAccessor();
+  const float max_w = static_cast<float>(config_.max_weight), free_value = static_cast<float>(config_.truncation_m);
+  Leaf* tsdf_leaf = nullptr;
+  Leaf* weight_leaf = nullptr;
+  Coord cached(std::numeric_limits<int>::min(), 0, 0);
+  const size_t updates = walkFar(*grids_->weight, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
+    if (leaf != cached) {
+      weight_leaf = weight.probeLeaf(leaf);
+      tsdf_leaf = tsdf.touchLeaf(leaf);  // exists with the weight's (integrate())
+      cached = leaf;
+    }
+    freeUpdates(tsdf_leaf, weight_leaf, at, 1.0f, free_value, max_w);
+  });
   stats_.voxel_updates += updates;
   stats_.integrate_seconds += elapsed(t0);
   return updates;
+}
+
+void FusedMap::merge(const FusedMap& other) {
+  if (other.config_.voxel_m != config_.voxel_m || other.config_.truncation_m != config_.truncation_m)
+    throw ConfigError("cannot merge a fused map of voxel " + std::to_string(other.config_.voxel_m) + " m, truncation " +
+                      std::to_string(other.config_.truncation_m) + " m into one of voxel " +
+                      std::to_string(config_.voxel_m) + " m, truncation " + std::to_string(config_.truncation_m) +
+                      " m");
+  const auto t0 = std::chrono::steady_clock::now();
+  openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
+  openvdb::FloatGrid::Accessor weight = grids_->weight->getAccessor();
+  ConstAccessor other_tsdf = other.grids_->tsdf->getConstAccessor();
+  const float max_w = static_cast<float>(config_.max_weight);
+  const double leaf_bytes = 2.0 * (sizeof(Leaf) + Leaf::SIZE * sizeof(float));
+  const size_t max_leaves = static_cast<size_t>(bound_share_ * config_.max_grid_mb * 1048576.0 / leaf_bytes);
+  for (auto it = other.grids_->weight->tree().cbeginLeaf(); it; ++it) {
+    const Leaf& other_weight = *it;
+    const Coord origin = other_weight.origin();
+    const Leaf* const other_tsdf_leaf = other_tsdf.probeConstLeaf(origin);
+    Leaf* weight_leaf = weight.probeLeaf(origin);
+    if (!weight_leaf) {
+      if (++stats_.leaves_created > max_leaves)
+        throw GridBoundError("the fused map's grids passed max_grid_mb = " + std::to_string(config_.max_grid_mb) +
+                             " MB (" + std::to_string(stats_.leaves_created) +
+                             " leaf nodes of 8^3 voxels) while merging the threads' grids: voxel_m = " +
+                             std::to_string(config_.voxel_m) + " m is too fine for the mapped space");
+      weight_leaf = weight.touchLeaf(origin);
+    }
+    Leaf* const tsdf_leaf = tsdf.touchLeaf(origin);
+    for (auto v = other_weight.cbeginValueOn(); v; ++v) {
+      const openvdb::Index at = v.pos();
+      const float w2 = *v;
+      if (w2 <= 0.0f) continue;
+      const float D2 = other_tsdf_leaf ? other_tsdf_leaf->getValue(at) : static_cast<float>(config_.truncation_m);
+      const float w1 = weight_leaf->getValue(at);
+      const float D1 = w1 > 0.0f ? tsdf_leaf->getValue(at) : 0.0f;
+      tsdf_leaf->setValueOn(at, (D1 * w1 + D2 * w2) / (w1 + w2));
+      weight_leaf->setValueOn(at, std::min(w1 + w2, max_w));
+    }
+  }
+  stats_.scans += other.stats_.scans;
+  stats_.points += other.stats_.points;
+  stats_.skipped_points += other.stats_.skipped_points;
+  stats_.voxel_updates += other.stats_.voxel_updates;
+  stats_.integrate_seconds += elapsed(t0);
 }
 
 ScanPoints FusedMap::surfacePoints() const {
@@ -468,43 +562,131 @@ void FusedMap::save(const std::string& path) const {
 }
 
 size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vector<std::string>* skipped) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const double seconds_before = fused.stats_.integrate_seconds;
   const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, skipped);
   const MapDirectory& map = *opened;
-  size_t loaded = 0;
-  std::vector<Eigen::Vector3f> points;
-  for (size_t s = 0; s < map.size(); ++s) {
+  const size_t n = map.size();
+  const int threads = static_cast<int>(std::min<size_t>(std::max(1, fused.config().threads), n));
+  // Thread t takes the scans [first(t), first(t + 1)): runs of consecutive scans.
+  const auto first = [&](int t) { return n * static_cast<size_t>(t) / static_cast<size_t>(threads); };
+  // A scan in the map frame with its sensor origin; false (and the problem in `problem`) when its file
+  // cannot be read.
+  const auto load = [&](size_t s, std::vector<Eigen::Vector3f>& points, Eigen::Vector3f& origin, std::string& problem) {
     const MapScanInfo& info = map.scans()[s];
     PointCloud scan;
     try {
       scan = map.loadScan(s);
     } catch (const std::exception& e) {
-      if (!skipped) throw;
-      skipped->push_back("scan " + std::to_string(info.index) + " skipped: " + e.what());
-      continue;
+      if (!skipped) throw;  // strict: the file's own error
+      problem = "scan " + std::to_string(info.index) + " skipped: " + e.what();
+      return false;
     }
     const Eigen::Isometry3f T_map_base = info.map_pose.toIsometry3f();
     points.resize(scan.points.size());
     for (size_t i = 0; i < scan.points.size(); ++i) points[i] = T_map_base * scan.points[i];  // NaN stays NaN
-    fused.integrate(points, T_map_base * info.sensor_origin.cast<float>());
-    ++loaded;
-  }
-  if (loaded == 0) throw IoError(dir, "none of its " + std::to_string(map.size()) + " scan files could be read");
-  if (fused.config().carve_far) {  // every beam's far free space, now that every surface's voxels exist
-    for (size_t s = 0; s < map.size(); ++s) {
-      const MapScanInfo& info = map.scans()[s];
-      PointCloud scan;
+    origin = T_map_base * info.sensor_origin.cast<float>();
+    return true;
+  };
+  // Runs work(t) for every thread (the caller's thread is the first); rethrows the first thread's
+  // exception (in scan order) after all are done.
+  const auto inThreads = [&](const std::function<void(int)>& work) {
+    std::vector<std::exception_ptr> failed(threads);
+    const auto guarded = [&](int t) {
       try {
-        scan = map.loadScan(s);
-      } catch (const std::exception&) {
-        continue;  // named in the first pass
+        work(t);
+      } catch (...) {
+        failed[t] = std::current_exception();
       }
-      const Eigen::Isometry3f T_map_base = info.map_pose.toIsometry3f();
-      points.resize(scan.points.size());
-      for (size_t i = 0; i < scan.points.size(); ++i) points[i] = T_map_base * scan.points[i];
-      fused.carveFar(points, T_map_base * info.sensor_origin.cast<float>());
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(guarded, t);
+    guarded(0);
+    for (std::thread& th : pool) th.join();
+    for (const std::exception_ptr& e : failed)
+      if (e) std::rethrow_exception(e);
+  };
+
+  // The near pass: each thread into grids of its own (the first into `fused`), merged afterwards.
+  std::vector<std::unique_ptr<FusedMap>> parts;
+  FusedMapConfig part_config = fused.config();
+  for (int t = 1; t < threads; ++t) {
+    parts.emplace_back(new FusedMap(part_config));
+    parts.back()->bound_share_ = 1.0 / threads;
+  }
+  fused.bound_share_ = 1.0 / threads;
+  std::vector<std::vector<std::string>> problems(threads);
+  std::vector<size_t> loaded(threads, 0);
+  try {
+    inThreads([&](int t) {
+      FusedMap& into = t == 0 ? fused : *parts[t - 1];
+      std::vector<Eigen::Vector3f> points;
+      Eigen::Vector3f origin;
+      for (size_t s = first(t); s < first(t + 1); ++s) {
+        std::string problem;
+        if (!load(s, points, origin, problem)) {
+          problems[t].push_back(problem);
+          continue;
+        }
+        into.integrate(points, origin);
+        ++loaded[t];
+      }
+    });
+  } catch (...) {
+    fused.bound_share_ = 1.0;
+    throw;
+  }
+  fused.bound_share_ = 1.0;
+  for (const auto& part : parts) fused.merge(*part);
+  parts.clear();
+  size_t total = 0;
+  for (int t = 0; t < threads; ++t) {
+    total += loaded[t];
+    if (skipped) skipped->insert(skipped->end(), problems[t].begin(), problems[t].end());
+  }
+  if (total == 0) throw IoError(dir, "none of its " + std::to_string(n) + " scan files could be read");
+
+  if (fused.config().carve_far) {  // every beam's far free space, now that every surface's voxels exist
+    // Each thread counts its free updates per voxel in a grid of its own (the field stays as it is
+    // while they walk); the counts are added at the end.
+    std::vector<openvdb::FloatGrid::Ptr> counts(threads);
+    std::vector<size_t> updates(threads, 0);
+    inThreads([&](int t) {
+      counts[t] = openvdb::FloatGrid::create(0.0f);
+      openvdb::FloatGrid::Accessor count = counts[t]->getAccessor();
+      Leaf* count_leaf = nullptr;
+      Coord cached(std::numeric_limits<int>::min(), 0, 0);
+      std::vector<Eigen::Vector3f> points;
+      Eigen::Vector3f origin;
+      for (size_t s = first(t); s < first(t + 1); ++s) {
+        std::string problem;
+        if (!load(s, points, origin, problem)) continue;  // named in the near pass (strict: it ended there)
+        updates[t] +=
+            walkFar(*fused.grids_->weight, fused.config(), points, origin, [&](const Coord& leaf, openvdb::Index at) {
+              if (leaf != cached) {
+                count_leaf = count.touchLeaf(leaf);
+                cached = leaf;
+              }
+              count_leaf->setValueOn(at, count_leaf->getValue(at) + 1.0f);
+            });
+      }
+    });
+    openvdb::FloatGrid::Accessor tsdf = fused.grids_->tsdf->getAccessor();
+    openvdb::FloatGrid::Accessor weight = fused.grids_->weight->getAccessor();
+    const float max_w = static_cast<float>(fused.config().max_weight);
+    const float free_value = static_cast<float>(fused.config().truncation_m);
+    for (int t = 0; t < threads; ++t) {
+      for (auto it = counts[t]->tree().cbeginLeaf(); it; ++it) {
+        Leaf* const tsdf_leaf = tsdf.probeLeaf(it->origin());
+        Leaf* const weight_leaf = weight.probeLeaf(it->origin());
+        for (auto v = it->cbeginValueOn(); v; ++v) freeUpdates(tsdf_leaf, weight_leaf, v.pos(), *v, free_value, max_w);
+      }
+      counts[t].reset();
+      fused.stats_.voxel_updates += updates[t];
     }
   }
-  return loaded;
+  fused.stats_.integrate_seconds = seconds_before + elapsed(t0);
+  return total;
 }
 
 bool isFusedMeshMethod(const std::string& method) { return method == "marching_cubes" || method == "fused_bpa"; }

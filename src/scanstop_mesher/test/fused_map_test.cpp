@@ -432,6 +432,51 @@ TEST(FusedMap, AMapDirectoryIsMeshedByEitherFusedMethod) {
   EXPECT_THROW(meshFusedMapDirectory(tmp.path + "/missing", config, "marching_cubes", MesherConfig()), IoError);
 }
 
+TEST(FusedMap, TwoThreadsGiveTheFieldOfOne) {
+  // integrateMapDirectory on two threads (a scan each into grids of its own, merged; the far pass's
+  // free updates counted apart and added at the end): the same voxels with the same weights, the
+  // distances within float rounding, the same mesh.
+  test_util::TempDir tmp("fused_map_test");
+  test::writeRoomMap(tmp.path + "/map");
+  FusedMapConfig config;
+  config.carve_m = 0.2;
+  config.carve_far = true;
+  config.threads = 1;
+  FusedMap one(config);
+  EXPECT_EQ(integrateMapDirectory(one, tmp.path + "/map"), 2u);
+  config.threads = 2;
+  FusedMap two(config);
+  EXPECT_EQ(integrateMapDirectory(two, tmp.path + "/map"), 2u);
+  EXPECT_EQ(two.stats().scans, 2u);
+  EXPECT_EQ(one.stats().points, two.stats().points);
+  EXPECT_EQ(one.stats().voxel_updates, two.stats().voxel_updates);
+  EXPECT_EQ(one.activeVoxels(), two.activeVoxels());
+  EXPECT_EQ(one.observedVoxels(), two.observedVoxels());
+  const test::Box room = test::roomBounds();
+  float worst = 0.0f;
+  size_t samples = 0, other_weight = 0, seen = 0;
+  for (float x = room.lo.x() - 0.1f; x <= room.hi.x() + 0.1f; x += 0.03f)
+    for (float y = room.lo.y() - 0.1f; y <= room.hi.y() + 0.1f; y += 0.03f)
+      for (float z = room.lo.z() - 0.1f; z <= room.hi.z() + 0.1f; z += 0.03f) {
+        const Eigen::Vector3f p(x, y, z);
+        ++samples;
+        seen += one.weightAt(p) > 0.0f;
+        other_weight += one.weightAt(p) != two.weightAt(p);
+        worst = std::max(worst, std::abs(one.distanceAt(p) - two.distanceAt(p)));
+      }
+  EXPECT_GT(seen, samples / 20) << "the samples reach the room's voxels";
+  EXPECT_EQ(other_weight, 0u);
+  EXPECT_LT(worst, 1e-5f);
+  const TriangleMesh a = one.extractMesh(), b = two.extractMesh();
+  EXPECT_NEAR(static_cast<double>(a.faces.size()), static_cast<double>(b.faces.size()), 0.001 * a.faces.size());
+  // A map of another voxel cannot be merged.
+  FusedMapConfig coarse;
+  coarse.voxel_m = 0.04;
+  coarse.truncation_m = 0.12;
+  FusedMap other(coarse);
+  EXPECT_THROW(two.merge(other), ConfigError);
+}
+
 TEST(FusedMap, AMapTooLargeForTheGridsIsMeshedInSlabsWithTheSameMesh) {
   // The grids bounded below what the room needs as a whole: built in slabs along x, whose meshes
   // meet exactly (the same vertices, welded at the borders) and make the whole map's mesh.

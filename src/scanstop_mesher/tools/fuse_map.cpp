@@ -1,5 +1,6 @@
 /// fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--carve-far] [--splat n] [--min-weight w]
-///          [--mesh marching_cubes|points|bpa] [--decimate m] [--radii r1,...] [--vdb FILE] [--json] [--skip-bad]
+///          [--threads n] [--mesh marching_cubes|points|bpa] [--decimate m] [--radii r1,...] [--vdb FILE] [--json]
+///          [--skip-bad]
 /// Integrates every scan of a map directory into the fused TSDF map (fused_map.h) and writes its
 /// surface: Marching Cubes of the field, the fused surface points with normals, or Ball Pivoting of
 /// those points.
@@ -26,8 +27,8 @@ namespace {
 constexpr const char* kUsage =
     "usage: fuse_map MAP_DIR OUTPUT [--voxel m] [--truncation m] [--carve m] [--carve-far] [--splat n] [--min-weight "
     "w]\n"
-    "                [--max-grid-mb MB] [--mesh marching_cubes|points|bpa] [--decimate m] [--radii r1,r2,...]\n"
-    "                [--vdb FILE] [--json] [--skip-bad]\n"
+    "                [--max-grid-mb MB] [--threads n] [--mesh marching_cubes|points|bpa] [--decimate m]\n"
+    "                [--radii r1,r2,...] [--vdb FILE] [--json] [--skip-bad]\n"
     "  MAP_DIR       a map directory (poses.csv + scans/)\n"
     "  OUTPUT        .stl or .ply for a mesh; .ply, .pcd or .xyz for --mesh points; its directory must exist\n"
     "  --voxel       voxel edge [m], [0.001, 1] (default 0.02)\n"
@@ -42,6 +43,8 @@ constexpr const char* kUsage =
     "  --min-weight  readings a voxel needs to count as seen, [1, 10000] (default 2)\n"
     "  --max-grid-mb refuse (exit 1) once the fused grids would need more memory [MB], [1, 1e6] (default\n"
     "                500): a voxel too fine for the map ends at once instead of filling the machine's memory\n"
+    "  --threads     threads integrating the scans, [1, 16] (default 2): each into grids of its own (within\n"
+    "                --max-grid-mb / threads), merged\n"
     "  --mesh        marching_cubes (default): volumeToMesh of the field; points: the fused surface points\n"
     "                with normals; bpa: Ball Pivoting of those points\n"
     "  --decimate    decimate the Marching Cubes mesh within this error [m], [0, 0.1] (default 0.002, as\n"
@@ -76,6 +79,7 @@ int main(int argc, char** argv) {
       .integer("--splat", config.splat, 0, 3)
       .real("--min-weight", config.min_weight, 1.0, 10000.0)
       .real("--max-grid-mb", config.max_grid_mb, 1.0, 1e6)
+      .integer("--threads", config.threads, 1, 16)
       .choice("--mesh", mode, {"marching_cubes", "points", "bpa"})
       .real("--decimate", decimate.max_error_m, 0.0, 0.1)
       .custom("--radii", [&](const std::string& v) { bpa_config.radii_m = parseRadii(v); })

@@ -60,6 +60,9 @@ struct MesherNodeConfig {
   /// again at 1.5 times the voxel, up to 4 times fused_voxel_m, and beyond that meshed by Ball
   /// Pivoting of its points (a WARN and the response's message say which).
   double fused_max_grid_mb = 1000.0;
+  /// Threads that integrate the scans into the fused map, [1, 16] (FusedMapConfig::threads): each
+  /// builds grids of its own within fused_max_grid_mb / fused_threads, merged afterwards.
+  int fused_threads = 2;
   /// Bound on the error of the Marching Cubes mesh's decimation [m], [0, 0.1]; 0: none (decimate.h:
   /// the root mean square distance of a merged vertex to the planes of the faces it replaces).
   double mesh_decimate_error_m = 0.002;
