@@ -31,6 +31,7 @@ namespace mesher {
 struct FusedMap::Grids {
   openvdb::FloatGrid::Ptr tsdf;    ///< signed distance [m]; background +truncation (never updated)
   openvdb::FloatGrid::Ptr weight;  ///< readings per voxel (capped); background 0
+  openvdb::FloatGrid::Ptr far;     ///< countFar's free updates per voxel, not yet applied (or null)
 };
 
 namespace {
@@ -175,6 +176,15 @@ FusedMap::FusedMap(FusedMap&&) noexcept = default;
 FusedMap& FusedMap::operator=(FusedMap&&) noexcept = default;
 
 size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
+  return integrateSigned(points, origin, false);
+}
+
+size_t FusedMap::deintegrate(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
+  return integrateSigned(points, origin, true);
+}
+
+size_t FusedMap::integrateSigned(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin,
+                                 bool remove) {
   if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
   const auto t0 = std::chrono::steady_clock::now();
   openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
@@ -218,6 +228,26 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
       // The voxels of a beam come leaf by leaf: the two leaves' buffers directly while in one
       // (the accessors' lookups per voxel took most of the integration's time).
       const Coord leaf_origin(c.x() & ~7, c.y() & ~7, c.z() & ~7);
+      if (remove) {  // the reading's update taken back: nothing is created
+        if (leaf_origin != cached_origin) {
+          weight_leaf = weight.probeLeaf(c);
+          tsdf_leaf = tsdf.probeLeaf(c);
+          cached_origin = leaf_origin;
+        }
+        if (!weight_leaf || !tsdf_leaf) return;
+        const openvdb::Index at = Leaf::coordToOffset(c);
+        const float w = weight_leaf->getValue(at);
+        if (w <= 0.0f) return;
+        if (w <= 1.0f) {  // its only reading: the voxel was never seen
+          tsdf_leaf->setValueOff(at, static_cast<float>(trunc));
+          weight_leaf->setValueOff(at, 0.0f);
+        } else {
+          tsdf_leaf->setValueOn(at, (tsdf_leaf->getValue(at) * w - value) / (w - 1.0f));
+          weight_leaf->setValueOn(at, w - 1.0f);
+        }
+        ++updates;
+        return;
+      }
       if (leaf_origin != cached_origin) {
         weight_leaf = weight.probeLeaf(c);
         if (!weight_leaf && ++stats_.leaves_created > max_leaves) {
@@ -273,8 +303,13 @@ size_t FusedMap::integrate(const std::vector<Eigen::Vector3f>& points, const Eig
       if (sdf >= -trunc && (splat == 0 || sdf > trunc)) update(Coord(ijk.x(), ijk.y(), ijk.z()), sdf);
     });
   }
-  ++stats_.scans;
-  stats_.points += used;
+  if (remove) {
+    stats_.scans -= std::min<size_t>(stats_.scans, 1);
+    stats_.points -= std::min(stats_.points, used);
+  } else {
+    ++stats_.scans;
+    stats_.points += used;
+  }
   stats_.voxel_updates += updates;
   stats_.integrate_seconds += elapsed(t0);
   return used;
@@ -351,6 +386,61 @@ size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eige
   stats_.voxel_updates += updates;
   stats_.integrate_seconds += elapsed(t0);
   return updates;
+}
+
+size_t FusedMap::countFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, bool remove) {
+  if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!grids_->far) {
+    grids_->far = openvdb::FloatGrid::create(0.0f);
+    grids_->far->setTransform(grids_->weight->transform().copy());
+    grids_->far->setName("far");
+  }
+  openvdb::FloatGrid::Accessor far = grids_->far->getAccessor();
+  Leaf* far_leaf = nullptr;
+  Coord cached(std::numeric_limits<int>::min(), 0, 0);
+  const size_t updates = walkFar(*grids_->weight, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
+    if (leaf != cached) {
+      far_leaf = remove ? far.probeLeaf(leaf) : far.touchLeaf(leaf);
+      cached = leaf;
+    }
+    if (!far_leaf) return;
+    const float n = far_leaf->getValue(at) + (remove ? -1.0f : 1.0f);
+    if (n > 0.0f)
+      far_leaf->setValueOn(at, n);
+    else
+      far_leaf->setValueOff(at, 0.0f);
+  });
+  stats_.integrate_seconds += elapsed(t0);
+  return updates;
+}
+
+void FusedMap::applyFar() {
+  if (!grids_->far) return;
+  openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
+  openvdb::FloatGrid::Accessor weight = grids_->weight->getAccessor();
+  const float max_w = static_cast<float>(config_.max_weight), free_value = static_cast<float>(config_.truncation_m);
+  for (auto it = grids_->far->tree().cbeginLeaf(); it; ++it) {
+    Leaf* const tsdf_leaf = tsdf.probeLeaf(it->origin());
+    Leaf* const weight_leaf = weight.probeLeaf(it->origin());
+    if (!tsdf_leaf || !weight_leaf) continue;
+    for (auto v = it->cbeginValueOn(); v; ++v) {
+      if (weight_leaf->getValue(v.pos()) <= 0.0f) continue;  // a voxel taken back since: nothing to carve
+      stats_.voxel_updates += static_cast<size_t>(*v);
+      freeUpdates(tsdf_leaf, weight_leaf, v.pos(), *v, free_value, max_w);
+    }
+  }
+  grids_->far.reset();
+}
+
+FusedMap FusedMap::copy() const {
+  FusedMap out(config_);
+  out.grids_->tsdf = grids_->tsdf->deepCopy();
+  out.grids_->weight = grids_->weight->deepCopy();
+  if (grids_->far) out.grids_->far = grids_->far->deepCopy();
+  out.stats_ = stats_;
+  out.bound_share_ = bound_share_;
+  return out;
 }
 
 void FusedMap::merge(const FusedMap& other) {

@@ -125,6 +125,21 @@ class FusedMap {
   /// Returns the voxels updated. Throws ConfigError for an origin that is not finite.
   size_t carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin);
 
+  /// Takes back integrate(points, origin) of a scan integrated before with exactly these points and
+  /// origin (the scan moved: SLAM corrected its pose): every voxel update is undone (the running
+  /// average's step backwards; a voxel left without readings is unseen again). Exact in exact
+  /// arithmetic while no weight reached max_weight. No voxel is created. Returns the readings.
+  size_t deintegrate(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin);
+
+  /// carveFar's walk, counted instead of applied (the incremental map, FusedMapTracker): each voxel's
+  /// free updates are added to (remove: taken from, down to 0) a count of its own that applyFar()
+  /// adds to the field; until then the field is the near integration's alone. Returns the voxels.
+  size_t countFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, bool remove = false);
+  /// Adds the counted free updates (countFar) to the field and clears the counts.
+  void applyFar();
+  /// A deep copy (grids, counts, stats).
+  FusedMap copy() const;
+
   /// Points on the zero crossing, one per surface cell (all 8 corners observed, a sign change):
   /// the mean of the cell's edge crossings (linear interpolation along the edges), moved onto the
   /// zero level of the cell's trilinear field by one Newton step. Normals: the field's gradient
@@ -169,6 +184,7 @@ class FusedMap {
   void save(const std::string& path) const;
 
  private:
+  size_t integrateSigned(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, bool remove);
   friend size_t integrateMapDirectory(FusedMap&, const std::string&, std::vector<std::string>*);
   struct Grids;
   /// Share of max_grid_mb this map may use (one thread's of integrateMapDirectory).

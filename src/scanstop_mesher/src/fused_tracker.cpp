@@ -1,0 +1,101 @@
+#include "scanstop_mesher/fused_tracker.h"
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "scanstop_common/cloud_io.h"
+#include "scanstop_common/config.h"
+#include "scanstop_common/map_dir.h"
+#include "scanstop_mesher/mesher.h"
+
+namespace scanstop {
+namespace mesher {
+
+void FusedTrackerConfig::validate() const {
+  requireInRange("repose_m", repose_m, 0.0, 1.0, "m");
+  requireInRange("repose_deg", repose_deg, 0.0, 180.0, "deg");
+}
+
+FusedMapTracker::FusedMapTracker(const FusedMapConfig& map_config, const FusedTrackerConfig& config)
+    : config_(config), map_(map_config) {
+  config_.validate();
+}
+
+namespace {
+
+/// A scan's readings in the map frame at `pose`, and its sensor origin there.
+void inMap(const PointCloud& scan, const Pose2D& pose, const Eigen::Vector3d& sensor_origin,
+           std::vector<Eigen::Vector3f>* points, Eigen::Vector3f* origin) {
+  const Eigen::Isometry3f T = pose.toIsometry3f();
+  points->resize(scan.points.size());
+  for (size_t i = 0; i < scan.points.size(); ++i) (*points)[i] = T * scan.points[i];  // NaN stays NaN
+  *origin = T * sensor_origin.cast<float>();
+}
+
+}  // namespace
+
+FusedTrackerUpdate FusedMapTracker::update(const std::string& dir) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FusedTrackerUpdate out;
+  const std::unique_ptr<const MapDirectory> map = openMapDirectory(dir, &out.problems);
+  const double turn = config_.repose_deg * M_PI / 180.0;
+  std::vector<Eigen::Vector3f> points;
+  Eigen::Vector3f origin;
+  for (size_t s = 0; s < map->size(); ++s) {
+    const MapScanInfo& info = map->scans()[s];
+    const auto known = tracked_.find(info.index);
+    if (known != tracked_.end()) {
+      const Tracked& was = known->second;
+      const double moved = std::hypot(info.map_pose.x - was.pose.x, info.map_pose.y - was.pose.y);
+      const double turned = std::abs(std::remainder(info.map_pose.yaw - was.pose.yaw, 2.0 * M_PI));
+      if (moved <= config_.repose_m && turned <= turn && info.sensor_origin == was.sensor_origin &&
+          info.file == was.file)
+        continue;
+    }
+    PointCloud scan;
+    try {
+      scan = map->loadScan(s);
+    } catch (const std::exception& e) {
+      out.problems.push_back("scan " + std::to_string(info.index) + " skipped: " + e.what());
+      continue;
+    }
+    if (known != tracked_.end()) {  // moved: taken back where it was integrated (the same file's points)
+      const Tracked& was = known->second;
+      PointCloud old_scan = scan;
+      if (was.file != info.file) {
+        try {
+          old_scan = readCloud(dir + "/" + was.file);
+        } catch (const std::exception& e) {
+          out.problems.push_back("scan " + std::to_string(info.index) +
+                                 ": its earlier file cannot be read to take it "
+                                 "back (" +
+                                 e.what() + "): kept at its earlier pose");
+          continue;
+        }
+      }
+      inMap(old_scan, was.pose, was.sensor_origin, &points, &origin);
+      if (map_.config().carve_far) map_.countFar(points, origin, true);
+      map_.deintegrate(points, origin);
+      ++out.reintegrated;
+    } else {
+      ++out.integrated;
+    }
+    inMap(scan, info.map_pose, info.sensor_origin, &points, &origin);
+    map_.integrate(points, origin);
+    if (map_.config().carve_far) map_.countFar(points, origin);
+    tracked_[info.index] = Tracked{info.map_pose, info.sensor_origin, info.file};
+  }
+  out.scans = tracked_.size();
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+FusedMap FusedMapTracker::snapshot() const {
+  FusedMap copy = map_.copy();
+  copy.applyFar();
+  return copy;
+}
+
+}  // namespace mesher
+}  // namespace scanstop
