@@ -56,6 +56,8 @@ void MesherNodeConfig::validate() const {
   requireInRange("fused_max_grid_mb", fused_max_grid_mb, 1.0, 1e6, "MB");
   requireInRange("fused_threads", fused_threads, 1, 16);
   requireInRange("mesh_decimate_error_m", mesh_decimate_error_m, 0.0, 0.1, "m");
+  requireInRange("fused_repose_m", fused_repose_m, 0.0, 1.0, "m");
+  requireInRange("fused_repose_deg", fused_repose_deg, 0.0, 180.0, "deg");
   if (publish_map && map_dir.empty()) throw ConfigError("parameter 'publish_map' is true but 'map_dir' is empty");
   if (require_map && map_dir.empty()) throw ConfigError("parameter 'require_map' is true but 'map_dir' is empty");
   if (!default_output.empty()) {
@@ -77,6 +79,22 @@ std::string MesherNodeConfig::allowedOutputDir() const {
   if (!map_dir.empty()) return dirname(map_dir);
   return "";
 }
+
+namespace {
+
+/// The fused map's settings of the node's parameters at a voxel [m] (the truncation 3 voxels).
+FusedMapConfig fusedConfigOf(const MesherNodeConfig& c, double voxel_m) {
+  FusedMapConfig fc;
+  fc.voxel_m = voxel_m;
+  fc.truncation_m = 3.0 * voxel_m;
+  fc.carve_m = c.fused_carve_m;
+  fc.carve_far = c.fused_carve_far;
+  fc.max_grid_mb = c.fused_max_grid_mb;
+  fc.threads = c.fused_threads;
+  return fc;
+}
+
+}  // namespace
 
 BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   MesherNodeConfig& c = config_;
@@ -108,6 +126,9 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   params.optional("fused_threads", c.fused_threads);
   params.optional("fused_map_output", c.fused_map_output);
   params.optional("mesh_decimate_error_m", c.mesh_decimate_error_m);
+  params.optional("fused_incremental", c.fused_incremental);
+  params.optional("fused_repose_m", c.fused_repose_m);
+  params.optional("fused_repose_deg", c.fused_repose_deg);
   params.rejectUnknown();
   c.validate();
   if (c.require_map) requireMapDirectory(c.map_dir);
@@ -135,6 +156,116 @@ BpaMesherNode::BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   }
   if (c.publish_map || !c.load_mesh.empty())
     map_timer_ = nh.createWallTimer(ros::WallDuration(c.map_poll_s), &BpaMesherNode::onMapTimer, this);
+  if (c.fused_incremental && isFusedMeshMethod(c.mesh_method) && !c.map_dir.empty()) {
+    tracker_.reset(
+        new FusedMapTracker(fusedConfig(c.fused_voxel_m), FusedTrackerConfig{c.fused_repose_m, c.fused_repose_deg}));
+    tracker_thread_ = std::thread(&BpaMesherNode::trackLoop, this);
+  }
+}
+
+BpaMesherNode::~BpaMesherNode() {
+  stop_ = true;
+  if (tracker_thread_.joinable()) tracker_thread_.join();
+}
+
+FusedMapConfig BpaMesherNode::fusedConfig(double voxel_m) const { return fusedConfigOf(config_, voxel_m); }
+
+void BpaMesherNode::trackLoop() {
+  while (!stop_) {
+    for (double slept = 0.0; slept < config_.map_poll_s && !stop_; slept += 0.05)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (stop_) break;
+    std::lock_guard<std::mutex> lock(tracker_mutex_);
+    if (!tracker_) break;
+    updateTracker("during the mission");
+    if (tracker_ && fused_pub_.getNumSubscribers() > 0 && tracker_->scans() > 0) {
+      PointCloud surface;  // the live map (the far carving counted, not applied), for the view
+      for (const Eigen::Vector3f& p : tracker_->map().surfacePoints().points)
+        if (p.z() <= config_.display_max_z_m) surface.points.push_back(p);
+      surface.setUnorganized();
+      fused_pub_.publish(ros_conv::toMsg(surface, config_.frame_id, ros::Time::now()));
+    }
+  }
+}
+
+FusedTrackerUpdate BpaMesherNode::updateTracker(const char* why) {
+  FusedTrackerUpdate u;
+  std::string poses;
+  try {
+    poses = readFile(config_.map_dir + "/poses.csv");
+  } catch (const IoError&) {
+    return u;  // no scan yet
+  }
+  if (poses == tracked_poses_) return u;
+  try {
+    u = tracker_->update(config_.map_dir);
+    tracked_poses_ = poses;
+    if (u.integrated + u.reintegrated > 0)
+      ROS_INFO("bpa_mesher_node: fused map %s: %zu new and %zu moved scans integrated in %.2f s (%zu scans, %zu MB)",
+               why, u.integrated, u.reintegrated, u.seconds, u.scans, tracker_->map().memoryBytes() / 1048576);
+    for (const std::string& p : u.problems) ROS_WARN_THROTTLE(60.0, "bpa_mesher_node: fused map: %s", p.c_str());
+  } catch (const GridBoundError& e) {
+    ROS_WARN(
+        "bpa_mesher_node: the fused map kept during the mission would pass fused_max_grid_mb = %.0f MB (%s): "
+        "dropped; build_mesh fuses every scan then (in slabs)",
+        config_.fused_max_grid_mb, e.what());
+    tracker_.reset();
+    malloc_trim(0);
+  } catch (const IoError& e) {
+    ROS_WARN_THROTTLE(30.0, "bpa_mesher_node: fused map: %s", e.what());  // tried again at the next change
+  }
+  return u;
+}
+
+bool BpaMesherNode::buildFromTracker(const MesherConfig& mc, const std::string& output,
+                                     scanstop_msgs::BuildMesh::Response& res) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FusedMap fused;
+  size_t scans = 0;
+  FusedTrackerUpdate last;
+  {
+    std::lock_guard<std::mutex> lock(tracker_mutex_);
+    if (!tracker_) return false;
+    tracked_poses_.clear();  // catch up whatever the last poll saw
+    last = updateTracker("at build_mesh");
+    if (!tracker_ || tracker_->scans() == 0) return false;
+    scans = tracker_->scans();
+    fused = tracker_->snapshot();
+  }
+  const double catch_up_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t_mesh = std::chrono::steady_clock::now();
+  TriangleMesh mesh;
+  std::vector<Eigen::Vector3f> surface;
+  size_t surface_points = 0;
+  if (config_.mesh_method == "marching_cubes") {
+    mesh = fused.extractMesh();
+    surface = mesh.vertices;  // one per surface cell
+  } else {
+    ScanPoints sp = fused.surfacePoints();
+    surface_points = sp.size();
+    if (sp.size() > 0) mesh = buildMesh(sp, mc).mesh;
+    surface = std::move(sp.points);
+  }
+  if (mesh.faces.empty()) return false;  // nothing seen twice yet: the pass over the directory says why
+  const double mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_mesh).count();
+  std::vector<std::string> skipped;
+  const std::string vdb = vdbPath(output);
+  try {
+    fused.save(vdb);
+  } catch (const IoError& e) {
+    ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", e.what());
+    skipped.push_back(std::string("the fused map was not saved: ") + e.what());
+  }
+  const std::string decimated = decimate(mesh);
+  publishFusedSurface(surface);
+  std::ostringstream msg;
+  msg << mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << scans
+      << " scans of map " << config_.map_dir << ", kept during the mission (voxel " << fused.config().voxel_m << " m, "
+      << fused.activeVoxels() << " voxels, " << fused.memoryBytes() / 1048576 << " MB; brought up to date in "
+      << catch_up_s << " s (" << last.integrated << " new, " << last.reintegrated << " moved scans), meshing " << mesh_s
+      << " s" << decimated << "; fused map in " << vdb << ", " << surface.size() << " surface points)";
+  finishMesh(mesh, output, surface_points, msg.str(), skipped, res);
+  return true;
 }
 
 void BpaMesherNode::reloadMesh() {
@@ -249,18 +380,37 @@ void BpaMesherNode::finishMesh(const TriangleMesh& mesh, const std::string& outp
   ROS_INFO("bpa_mesher_node: %s -> %s", res.message.c_str(), output.c_str());
 }
 
+std::string BpaMesherNode::vdbPath(const std::string& output) const {
+  // The fused map is kept with the run: beside the mesh unless fused_map_output says where.
+  return !config_.fused_map_output.empty() ? config_.fused_map_output
+                                           : output.substr(0, output.find_last_of('/') + 1) + "fused_map.vdb";
+}
+
+std::string BpaMesherNode::decimate(TriangleMesh& mesh) const {
+  if (config_.mesh_method != "marching_cubes" || config_.mesh_decimate_error_m <= 0.0) return "";
+  DecimateConfig dc;
+  dc.max_error_m = config_.mesh_decimate_error_m;
+  const DecimateStats d = decimateMesh(mesh, dc);
+  std::ostringstream out;
+  out << "; decimated from " << d.faces_before << " within " << dc.max_error_m * 1000.0 << " mm in " << d.seconds
+      << " s";
+  return out.str();
+}
+
+void BpaMesherNode::publishFusedSurface(const std::vector<Eigen::Vector3f>& points) {
+  PointCloud surface;
+  for (const Eigen::Vector3f& p : points)
+    if (p.z() <= config_.display_max_z_m) surface.points.push_back(p);  // the ceiling cut away for the view
+  surface.setUnorganized();
+  fused_pub_.publish(ros_conv::toMsg(surface, config_.frame_id, ros::Time::now()));
+}
+
 void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::string& output,
                                          scanstop_msgs::BuildMesh::Response& res) {
-  FusedMapConfig fc;
-  fc.carve_m = config_.fused_carve_m;
-  fc.carve_far = config_.fused_carve_far;
-  fc.max_grid_mb = config_.fused_max_grid_mb;
-  fc.threads = config_.fused_threads;
+  if (buildFromTracker(mc, output, res)) return;
+  FusedMapConfig fc = fusedConfig(config_.fused_voxel_m);
   std::vector<std::string> skipped;
-  // The fused map is kept with the run: beside the mesh unless fused_map_output says where.
-  const std::string vdb = !config_.fused_map_output.empty()
-                              ? config_.fused_map_output
-                              : output.substr(0, output.find_last_of('/') + 1) + "fused_map.vdb";
+  const std::string vdb = vdbPath(output);
   // A map too large for the grids at fused_voxel_m is built in slabs along x (meshFusedMapDirectory);
   // one whose 1 m slabs do not fit either is fused with coarser voxels (the grids' memory falls with
   // about the square of the voxel: a band of voxels around every surface), up to 4 times
@@ -301,24 +451,13 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
     ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", r.save_problem.c_str());
     skipped.push_back("the fused map was not saved: " + r.save_problem);
   }
-  std::ostringstream decimated;
-  if (config_.mesh_method == "marching_cubes" && config_.mesh_decimate_error_m > 0.0) {
-    DecimateConfig dc;
-    dc.max_error_m = config_.mesh_decimate_error_m;
-    const DecimateStats d = decimateMesh(r.mesh, dc);
-    decimated << "; decimated from " << d.faces_before << " within " << dc.max_error_m * 1000.0 << " mm in "
-              << d.seconds << " s";
-  }
-  PointCloud surface;
-  for (const Eigen::Vector3f& p : r.surface)
-    if (p.z() <= config_.display_max_z_m) surface.points.push_back(p);  // the ceiling cut away for the view
-  surface.setUnorganized();
-  fused_pub_.publish(ros_conv::toMsg(surface, config_.frame_id, ros::Time::now()));
+  const std::string decimated = decimate(r.mesh);
+  publishFusedSurface(r.surface);
   std::ostringstream msg;
   msg << r.mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << r.scans
       << " scans of map " << config_.map_dir << " (voxel " << fc.voxel_m << " m, " << r.voxels << " voxels, "
       << r.memory_bytes / 1048576 << " MB; integration " << r.integrate_s << " s, meshing " << r.mesh_s << " s"
-      << decimated.str() << "; "
+      << decimated << "; "
       << (r.slabs > 1 ? std::string("built in ") + std::to_string(r.slabs) +
                             " slabs along x, the largest within fused_max_grid_mb: no .vdb of the whole"
           : r.save_problem.empty() ? "fused map in " + vdb

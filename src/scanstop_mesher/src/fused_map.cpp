@@ -906,15 +906,16 @@ FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& co
     out.voxels = fused.activeVoxels();
     out.memory_bytes = fused.memoryBytes();
     const auto start = std::chrono::steady_clock::now();
-    const ScanPoints surface = fused.surfacePoints();
     if (method == "marching_cubes") {
       out.mesh = fused.extractMesh();
+      out.surface = out.mesh.vertices;  // one per surface cell, as surfacePoints()
     } else {
+      ScanPoints surface = fused.surfacePoints();
       out.surface_points = surface.size();
       if (surface.size() > 0) out.mesh = buildMesh(surface, bpa).mesh;
+      out.surface = std::move(surface.points);
     }
     out.mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    out.surface = surface.points;
     if (!save_path.empty()) try {
         fused.save(save_path);
       } catch (const IoError& e) {

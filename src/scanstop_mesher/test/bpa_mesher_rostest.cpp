@@ -194,6 +194,20 @@ TEST(BpaMesherNode, AFusedMethodKeepsTheFusedMapWithTheRunAndShowsItsSurface) {
   EXPECT_NE(srv.response.message.find(" within 2 mm in "), std::string::npos) << srv.response.message;
   EXPECT_LT(srv.response.triangles * 2ul, before) << srv.response.message;
   EXPECT_EQ(readMesh(g_map_dir + "/fused_mesh.ply").faces.size(), srv.response.triangles);
+  // The fused map was kept up to date while the map grew (fused_incremental): build_mesh found it
+  // ready.
+  EXPECT_NE(srv.response.message.find("kept during the mission"), std::string::npos) << srv.response.message;
+  // SLAM moves a scan by 5 cm (a relaxation): the next build integrates it again there.
+  {
+    MapDirectory map(g_map_dir);
+    Pose2D pose = map.scans()[1].map_pose;
+    pose.x += 0.05;
+    map.updatePoses({{map.scans()[1].index, pose}});
+  }
+  srv.request.output_path = g_map_dir + "/fused_mesh_moved.ply";
+  ASSERT_TRUE(client.call(srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  EXPECT_NE(srv.response.message.find("(0 new, 1 moved scans)"), std::string::npos) << srv.response.message;
   struct stat st;
   ASSERT_EQ(::stat((g_map_dir + "/fused_map.vdb").c_str(), &st), 0) << "no fused_map.vdb beside the mesh";
   EXPECT_GT(st.st_size, 10000);

@@ -10,9 +10,14 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
+#include <atomic>
+#include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "scanstop_mesher/fused_tracker.h"
 #include "scanstop_mesher/mesh_markers.h"
 #include "scanstop_mesher/mesher.h"
 
@@ -66,6 +71,14 @@ struct MesherNodeConfig {
   /// Bound on the error of the Marching Cubes mesh's decimation [m], [0, 0.1]; 0: none (decimate.h:
   /// the root mean square distance of a merged vertex to the planes of the faces it replaces).
   double mesh_decimate_error_m = 0.002;
+  /// With a fused mesh_method: keep the fused map up to date during the mission (FusedMapTracker, a
+  /// thread of its own checking map_dir every map_poll_s), so that build_mesh only integrates what is
+  /// new and meshes. false: build_mesh integrates every scan then.
+  bool fused_incremental = true;
+  /// A scan whose map pose moved farther [m] / turned more [deg] since it was integrated is integrated
+  /// again (FusedTrackerConfig).
+  double fused_repose_m = 0.005;
+  double fused_repose_deg = 0.1;
   /// Where a fused mesh_method writes the fused map (OpenVDB .vdb); "": fused_map.vdb beside the mesh.
   std::string fused_map_output;
   void validate() const;
@@ -78,8 +91,27 @@ class BpaMesherNode {
   /// Reads and validates the parameters, loads load_mesh; throws ConfigError / IoError naming the
   /// parameter or file that is wrong.
   BpaMesherNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  ~BpaMesherNode();
+  BpaMesherNode(const BpaMesherNode&) = delete;
+  BpaMesherNode& operator=(const BpaMesherNode&) = delete;
 
  private:
+  /// The fused map's thread: brings the tracker up to map_dir whenever poses.csv changes.
+  void trackLoop();
+  /// One update of the tracker (the caller holds tracker_mutex_); drops the tracker, with a WARN, when
+  /// it cannot go on (its grids would pass fused_max_grid_mb: build_mesh then integrates every scan).
+  FusedTrackerUpdate updateTracker(const char* why);
+  /// The fused map's settings at a voxel [m].
+  FusedMapConfig fusedConfig(double voxel_m) const;
+  /// Where the fused map of a mesh written to `output` goes.
+  std::string vdbPath(const std::string& output) const;
+  /// Decimates a Marching Cubes mesh by mesh_decimate_error_m; returns "; decimated from ..." for the
+  /// message ("" when not).
+  std::string decimate(TriangleMesh& mesh) const;
+  /// The fused map's surface points on mesher/fused_cloud, cut at display_max_z_m.
+  void publishFusedSurface(const std::vector<Eigen::Vector3f>& points);
+  /// build_mesh from the tracker's map; false when there is no tracker (build_mesh integrates anew).
+  bool buildFromTracker(const MesherConfig& mc, const std::string& output, scanstop_msgs::BuildMesh::Response& res);
   bool onBuildMesh(scanstop_msgs::BuildMesh::Request& req, scanstop_msgs::BuildMesh::Response& res);
   /// Loads the input, meshes, writes and publishes (the work of onBuildMesh after the request checks);
   /// every large buffer is released when it returns.
@@ -111,6 +143,11 @@ class BpaMesherNode {
   std::string published_poses_;
   long long mesh_mtime_ns_ = -1;
   std::string shown_mesh_file_;  ///< the mesh on mesher/mesh_markers ("" = none yet)
+  std::mutex tracker_mutex_;     ///< guards tracker_ and tracked_poses_
+  std::unique_ptr<FusedMapTracker> tracker_;
+  std::string tracked_poses_;  ///< poses.csv as the tracker last saw it
+  std::atomic<bool> stop_{false};
+  std::thread tracker_thread_;
 };
 
 }  // namespace mesher

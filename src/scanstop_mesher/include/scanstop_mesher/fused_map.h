@@ -207,7 +207,7 @@ struct FusedMesh {
   TriangleMesh mesh;
   size_t scans = 0;                      ///< scans integrated
   size_t surface_points = 0;             ///< fused surface points meshed ("fused_bpa")
-  std::vector<Eigen::Vector3f> surface;  ///< the fused map's surface points (for display) [m]
+  std::vector<Eigen::Vector3f> surface;  ///< the fused map's surface points (for display; Marching Cubes: its vertices) [m]
   std::string save_problem;              ///< why save_path could not be written ("" when it was, or none given)
   size_t voxels = 0;                     ///< active voxels of the fused map (summed over slabs)
   size_t memory_bytes = 0;               ///< of its grids (the largest slab's)
