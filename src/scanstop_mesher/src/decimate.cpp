@@ -1,6 +1,5 @@
 #include "scanstop_mesher/decimate.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -145,6 +144,7 @@ class Decimator {
     alive_vertex_.assign(nv, 1);
     version_.assign(nv, 0);
     locked_.assign(nv, 0);
+    mark_.assign(nv, 0u);
     for (size_t i = 0; i < pinned_.size() && i < nv; ++i) locked_[i] = pinned_[i];
     alive_face_.assign(mesh_.faces.size(), 1);
     alive_faces_ = mesh_.faces.size();
@@ -222,25 +222,17 @@ class Decimator {
       *p = locked_[u] ? pos_[u] : pos_[v];
       return q.eval(*p);
     }
-    // The minimum of the quadric nearest to the edge's midpoint: well constrained directions only
-    // (a flat patch constrains one direction; the vertex then stays at the midpoint within the plane).
-    const Eigen::Vector3d m = 0.5 * (pos_[u] + pos_[v]);
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(q.A());
-    const Eigen::Vector3d lambda = eig.eigenvalues();
-    const double lmax = lambda.cwiseAbs().maxCoeff();
-    const Eigen::Vector3d r = -q.b() - q.A() * m;
-    Eigen::Vector3d x = m;
-    for (int i = 0; i < 3; ++i) {
-      if (lambda[i] <= 1e-3 * lmax) continue;
-      const Eigen::Vector3d e = eig.eigenvectors().col(i);
-      x += e * (e.dot(r) / lambda[i]);
-    }
-    const double reach = (pos_[u] - pos_[v]).norm();
-    double best = q.eval(x);
-    *p = x;
-    if (!((x - m).norm() <= reach) || !std::isfinite(best)) best = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector3d& c : {m, pos_[u], pos_[v]}) {
+    // The quadric's minimum on the edge (the merged vertex stays between the two, where the surface
+    // runs; on a flat patch every point of the edge is as good: its middle).
+    const Eigen::Vector3d d = pos_[v] - pos_[u];
+    const Eigen::Matrix3d A = q.A();
+    const double curvature = d.dot(A * d);
+    const double t = curvature > 1e-12 * A.trace() * d.squaredNorm()
+                         ? std::clamp(-d.dot(A * pos_[u] + q.b()) / curvature, 0.0, 1.0)
+                         : 0.5;
+    *p = pos_[u] + t * d;
+    double best = q.eval(*p);
+    for (const Eigen::Vector3d& c : {pos_[u], pos_[v]}) {
       const double e = q.eval(c);
       if (e < best) best = e, *p = c;
     }
@@ -278,17 +270,32 @@ class Decimator {
   /// The link condition (the common neighbours of u and v are exactly the opposite corners of the
   /// edge's two faces) and no face around them folds or becomes a sliver.
   bool collapsible(int u, int v, const Eigen::Vector3d& p) {
-    neighbours(u, &nu_);
-    neighbours(v, &nv_);
-    common_.clear();
-    std::set_intersection(nu_.begin(), nu_.end(), nv_.begin(), nv_.end(), std::back_inserter(common_));
+    // Common neighbours by marks (u's with one stamp, each common one counted once with the next).
+    if (stamp_ >= 0xFFFFFFF0u) {
+      std::fill(mark_.begin(), mark_.end(), 0u);
+      stamp_ = 0;
+    }
+    const uint32_t mine = ++stamp_, counted = ++stamp_;
+    for (const int f : faces_of_[u])
+      if (alive_face_[f])
+        for (int k = 0; k < 3; ++k) mark_[mesh_.faces[f][k]] = mine;
+    size_t common = 0;
+    for (const int f : faces_of_[v]) {
+      if (!alive_face_[f]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int w = mesh_.faces[f][k];
+        if (w == u || w == v || mark_[w] != mine) continue;
+        mark_[w] = counted;
+        ++common;
+      }
+    }
     int shared = 0;
     for (const int f : faces_of_[u]) {
       if (!alive_face_[f]) continue;
       const Eigen::Vector3i& t = mesh_.faces[f];
       if (t[0] == v || t[1] == v || t[2] == v) ++shared;
     }
-    if (shared != 2 || common_.size() != 2) return false;
+    if (shared != 2 || common != 2) return false;
     for (const int w : {u, v}) {
       for (const int f : faces_of_[w]) {
         if (!alive_face_[f]) continue;
@@ -373,7 +380,9 @@ class Decimator {
   BucketQueue queue_{config_.max_error_m};
   std::vector<Candidate> pool_;  ///< candidates by slot
   std::vector<uint32_t> free_;   ///< slots popped, for reuse
-  std::vector<int> nu_, nv_, common_;
+  std::vector<int> nu_;
+  std::vector<uint32_t> mark_;  ///< per vertex: the stamp of the last collapsible() that saw it
+  uint32_t stamp_ = 0;
 };
 
 }  // namespace
