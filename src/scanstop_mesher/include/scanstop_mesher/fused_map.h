@@ -205,13 +205,14 @@ size_t integrateMapDirectory(FusedMap& map, const std::string& dir, std::vector<
 /// A mesh of a map directory made through its fused map (bpa_mesher_node's `mesh_method`).
 struct FusedMesh {
   TriangleMesh mesh;
-  size_t scans = 0;                      ///< scans integrated
-  size_t surface_points = 0;             ///< fused surface points meshed ("fused_bpa")
-  std::vector<Eigen::Vector3f> surface;  ///< the fused map's surface points (for display; Marching Cubes: its vertices) [m]
-  std::string save_problem;              ///< why save_path could not be written ("" when it was, or none given)
-  size_t voxels = 0;                     ///< active voxels of the fused map (summed over slabs)
-  size_t memory_bytes = 0;               ///< of its grids (the largest slab's)
-  size_t slabs = 1;                      ///< slabs along x it was built in (1: the whole map at once)
+  size_t scans = 0;           ///< scans integrated
+  size_t surface_points = 0;  ///< fused surface points meshed ("fused_bpa")
+  std::vector<Eigen::Vector3f>
+      surface;               ///< the fused map's surface points (for display; Marching Cubes: its vertices) [m]
+  std::string save_problem;  ///< why save_path could not be written ("" when it was, or none given)
+  size_t voxels = 0;         ///< active voxels of the fused map (summed over slabs)
+  size_t memory_bytes = 0;   ///< of its grids (the largest slab's)
+  size_t slabs = 1;          ///< slabs along x it was built in (1: the whole map at once)
   double integrate_s = 0.0, mesh_s = 0.0;
 };
 /// The methods meshFusedMapDirectory takes: "marching_cubes" (FusedMap::extractMesh) and
