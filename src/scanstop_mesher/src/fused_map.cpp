@@ -31,7 +31,6 @@ namespace mesher {
 struct FusedMap::Grids {
   openvdb::FloatGrid::Ptr tsdf;    ///< signed distance [m]; background +truncation (never updated)
   openvdb::FloatGrid::Ptr weight;  ///< readings per voxel (capped); background 0
-  openvdb::FloatGrid::Ptr far;     ///< countFar's free updates per voxel, not yet applied (or null)
 };
 
 namespace {
@@ -364,6 +363,25 @@ inline void freeUpdates(Leaf* tsdf_leaf, Leaf* weight_leaf, openvdb::Index at, f
   weight_leaf->setValueOn(at, std::min(w + n, max_w));
 }
 
+/// Runs work(t) for t in [0, threads) on as many threads (the caller's is the first); rethrows the
+/// first thread's exception (in thread order) after all are done.
+void runInThreads(int threads, const std::function<void(int)>& work) {
+  std::vector<std::exception_ptr> failed(threads);
+  const auto guarded = [&](int t) {
+    try {
+      work(t);
+    } catch (...) {
+      failed[t] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(guarded, t);
+  guarded(0);
+  for (std::thread& th : pool) th.join();
+  for (const std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(e);
+}
+
 }  // namespace
 
 size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
@@ -388,56 +406,52 @@ size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eige
   return updates;
 }
 
-size_t FusedMap::countFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, bool remove) {
-  if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");
+void FusedMap::carveFarAll(size_t scans, const ScanLoader& load, int threads) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (!grids_->far) {
-    grids_->far = openvdb::FloatGrid::create(0.0f);
-    grids_->far->setTransform(grids_->weight->transform().copy());
-    grids_->far->setName("far");
-  }
-  openvdb::FloatGrid::Accessor far = grids_->far->getAccessor();
-  Leaf* far_leaf = nullptr;
-  Coord cached(std::numeric_limits<int>::min(), 0, 0);
-  const size_t updates = walkFar(*grids_->weight, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
-    if (leaf != cached) {
-      far_leaf = remove ? far.probeLeaf(leaf) : far.touchLeaf(leaf);
-      cached = leaf;
+  threads = static_cast<int>(std::min<size_t>(std::max(1, threads), std::max<size_t>(scans, 1)));
+  const auto first = [&](int t) { return scans * static_cast<size_t>(t) / static_cast<size_t>(threads); };
+  // Each thread counts its free updates per voxel in a grid of its own (the field stays as it is
+  // while they walk); the counts are added at the end.
+  std::vector<openvdb::FloatGrid::Ptr> counts(threads);
+  std::vector<size_t> updates(threads, 0);
+  runInThreads(threads, [&](int t) {
+    counts[t] = openvdb::FloatGrid::create(0.0f);
+    openvdb::FloatGrid::Accessor count = counts[t]->getAccessor();
+    Leaf* count_leaf = nullptr;
+    Coord cached(std::numeric_limits<int>::min(), 0, 0);
+    std::vector<Eigen::Vector3f> points;
+    Eigen::Vector3f origin;
+    for (size_t s = first(t); s < first(t + 1); ++s) {
+      if (!load(s, points, origin)) continue;
+      updates[t] += walkFar(*grids_->weight, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
+        if (leaf != cached) {
+          count_leaf = count.touchLeaf(leaf);
+          cached = leaf;
+        }
+        count_leaf->setValueOn(at, count_leaf->getValue(at) + 1.0f);
+      });
     }
-    if (!far_leaf) return;
-    const float n = far_leaf->getValue(at) + (remove ? -1.0f : 1.0f);
-    if (n > 0.0f)
-      far_leaf->setValueOn(at, n);
-    else
-      far_leaf->setValueOff(at, 0.0f);
   });
-  stats_.integrate_seconds += elapsed(t0);
-  return updates;
-}
-
-void FusedMap::applyFar() {
-  if (!grids_->far) return;
   openvdb::FloatGrid::Accessor tsdf = grids_->tsdf->getAccessor();
   openvdb::FloatGrid::Accessor weight = grids_->weight->getAccessor();
-  const float max_w = static_cast<float>(config_.max_weight), free_value = static_cast<float>(config_.truncation_m);
-  for (auto it = grids_->far->tree().cbeginLeaf(); it; ++it) {
-    Leaf* const tsdf_leaf = tsdf.probeLeaf(it->origin());
-    Leaf* const weight_leaf = weight.probeLeaf(it->origin());
-    if (!tsdf_leaf || !weight_leaf) continue;
-    for (auto v = it->cbeginValueOn(); v; ++v) {
-      if (weight_leaf->getValue(v.pos()) <= 0.0f) continue;  // a voxel taken back since: nothing to carve
-      stats_.voxel_updates += static_cast<size_t>(*v);
-      freeUpdates(tsdf_leaf, weight_leaf, v.pos(), *v, free_value, max_w);
+  const float max_w = static_cast<float>(config_.max_weight);
+  const float free_value = static_cast<float>(config_.truncation_m);
+  for (int t = 0; t < threads; ++t) {
+    for (auto it = counts[t]->tree().cbeginLeaf(); it; ++it) {
+      Leaf* const tsdf_leaf = tsdf.probeLeaf(it->origin());
+      Leaf* const weight_leaf = weight.probeLeaf(it->origin());
+      for (auto v = it->cbeginValueOn(); v; ++v) freeUpdates(tsdf_leaf, weight_leaf, v.pos(), *v, free_value, max_w);
     }
+    counts[t].reset();
+    stats_.voxel_updates += updates[t];
   }
-  grids_->far.reset();
+  stats_.integrate_seconds += elapsed(t0);
 }
 
 FusedMap FusedMap::copy() const {
   FusedMap out(config_);
   out.grids_->tsdf = grids_->tsdf->deepCopy();
   out.grids_->weight = grids_->weight->deepCopy();
-  if (grids_->far) out.grids_->far = grids_->far->deepCopy();
   out.stats_ = stats_;
   out.bound_share_ = bound_share_;
   return out;
@@ -678,24 +692,7 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
     origin = T_map_base * info.sensor_origin.cast<float>();
     return true;
   };
-  // Runs work(t) for every thread (the caller's thread is the first); rethrows the first thread's
-  // exception (in scan order) after all are done.
-  const auto inThreads = [&](const std::function<void(int)>& work) {
-    std::vector<std::exception_ptr> failed(threads);
-    const auto guarded = [&](int t) {
-      try {
-        work(t);
-      } catch (...) {
-        failed[t] = std::current_exception();
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(guarded, t);
-    guarded(0);
-    for (std::thread& th : pool) th.join();
-    for (const std::exception_ptr& e : failed)
-      if (e) std::rethrow_exception(e);
-  };
+  const auto inThreads = [&](const std::function<void(int)>& work) { runInThreads(threads, work); };
 
   // The near pass: each thread into grids of its own (the first into `fused`), merged afterwards.
   std::vector<std::unique_ptr<FusedMap>> parts;
@@ -736,45 +733,14 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
   }
   if (total == 0) throw IoError(dir, "none of its " + std::to_string(n) + " scan files could be read");
 
-  if (fused.config().carve_far) {  // every beam's far free space, now that every surface's voxels exist
-    // Each thread counts its free updates per voxel in a grid of its own (the field stays as it is
-    // while they walk); the counts are added at the end.
-    std::vector<openvdb::FloatGrid::Ptr> counts(threads);
-    std::vector<size_t> updates(threads, 0);
-    inThreads([&](int t) {
-      counts[t] = openvdb::FloatGrid::create(0.0f);
-      openvdb::FloatGrid::Accessor count = counts[t]->getAccessor();
-      Leaf* count_leaf = nullptr;
-      Coord cached(std::numeric_limits<int>::min(), 0, 0);
-      std::vector<Eigen::Vector3f> points;
-      Eigen::Vector3f origin;
-      for (size_t s = first(t); s < first(t + 1); ++s) {
-        std::string problem;
-        if (!load(s, points, origin, problem)) continue;  // named in the near pass (strict: it ended there)
-        updates[t] +=
-            walkFar(*fused.grids_->weight, fused.config(), points, origin, [&](const Coord& leaf, openvdb::Index at) {
-              if (leaf != cached) {
-                count_leaf = count.touchLeaf(leaf);
-                cached = leaf;
-              }
-              count_leaf->setValueOn(at, count_leaf->getValue(at) + 1.0f);
-            });
-      }
-    });
-    openvdb::FloatGrid::Accessor tsdf = fused.grids_->tsdf->getAccessor();
-    openvdb::FloatGrid::Accessor weight = fused.grids_->weight->getAccessor();
-    const float max_w = static_cast<float>(fused.config().max_weight);
-    const float free_value = static_cast<float>(fused.config().truncation_m);
-    for (int t = 0; t < threads; ++t) {
-      for (auto it = counts[t]->tree().cbeginLeaf(); it; ++it) {
-        Leaf* const tsdf_leaf = tsdf.probeLeaf(it->origin());
-        Leaf* const weight_leaf = weight.probeLeaf(it->origin());
-        for (auto v = it->cbeginValueOn(); v; ++v) freeUpdates(tsdf_leaf, weight_leaf, v.pos(), *v, free_value, max_w);
-      }
-      counts[t].reset();
-      fused.stats_.voxel_updates += updates[t];
-    }
-  }
+  if (fused.config().carve_far)  // every beam's far free space, now that every surface's voxels exist
+    fused.carveFarAll(
+        n,
+        [&](size_t s, std::vector<Eigen::Vector3f>& points, Eigen::Vector3f& origin) {
+          std::string problem;
+          return load(s, points, origin, problem);  // a scan that cannot be read was named in the near pass
+        },
+        threads);
   fused.stats_.integrate_seconds = seconds_before + elapsed(t0);
   return total;
 }
@@ -848,9 +814,11 @@ FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, cons
     out.voxels += fused.activeVoxels();
     out.memory_bytes = std::max(out.memory_bytes, fused.memoryBytes());
     const auto start = std::chrono::steady_clock::now();
-    const ScanPoints part = fused.surfacePoints(a, b);
-    surface.points.insert(surface.points.end(), part.points.begin(), part.points.end());
-    surface.normals.insert(surface.normals.end(), part.normals.begin(), part.normals.end());
+    if (method != "marching_cubes") {  // Marching Cubes shows its vertices (one per surface cell)
+      const ScanPoints part = fused.surfacePoints(a, b);
+      surface.points.insert(surface.points.end(), part.points.begin(), part.points.end());
+      surface.normals.insert(surface.normals.end(), part.normals.begin(), part.normals.end());
+    }
     if (method == "marching_cubes") {
       const TriangleMesh m = fused.extractSlabMesh(a, b);
       std::vector<int> index(m.vertices.size());
@@ -881,6 +849,7 @@ FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, cons
   const auto start = std::chrono::steady_clock::now();
   if (method == "marching_cubes") {
     dropPinchedFansOf(out.mesh);
+    surface.points = out.mesh.vertices;
   } else {
     out.surface_points = surface.size();
     if (surface.size() > 0) out.mesh = buildMesh(surface, bpa).mesh;

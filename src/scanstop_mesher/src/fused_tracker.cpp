@@ -38,6 +38,7 @@ void inMap(const PointCloud& scan, const Pose2D& pose, const Eigen::Vector3d& se
 FusedTrackerUpdate FusedMapTracker::update(const std::string& dir) {
   const auto t0 = std::chrono::steady_clock::now();
   FusedTrackerUpdate out;
+  dir_ = dir;
   const std::unique_ptr<const MapDirectory> map = openMapDirectory(dir, &out.problems);
   const double turn = config_.repose_deg * M_PI / 180.0;
   std::vector<Eigen::Vector3f> points;
@@ -75,7 +76,6 @@ FusedTrackerUpdate FusedMapTracker::update(const std::string& dir) {
         }
       }
       inMap(old_scan, was.pose, was.sensor_origin, &points, &origin);
-      if (map_.config().carve_far) map_.countFar(points, origin, true);
       map_.deintegrate(points, origin);
       ++out.reintegrated;
     } else {
@@ -83,7 +83,6 @@ FusedTrackerUpdate FusedMapTracker::update(const std::string& dir) {
     }
     inMap(scan, info.map_pose, info.sensor_origin, &points, &origin);
     map_.integrate(points, origin);
-    if (map_.config().carve_far) map_.countFar(points, origin);
     tracked_[info.index] = Tracked{info.map_pose, info.sensor_origin, info.file};
   }
   out.scans = tracked_.size();
@@ -93,7 +92,22 @@ FusedTrackerUpdate FusedMapTracker::update(const std::string& dir) {
 
 FusedMap FusedMapTracker::snapshot() const {
   FusedMap copy = map_.copy();
-  copy.applyFar();
+  if (!map_.config().carve_far || tracked_.empty()) return copy;
+  std::vector<const Tracked*> scans;
+  for (const auto& entry : tracked_) scans.push_back(&entry.second);
+  copy.carveFarAll(
+      scans.size(),
+      [&](size_t s, std::vector<Eigen::Vector3f>& points, Eigen::Vector3f& origin) {
+        PointCloud scan;
+        try {
+          scan = readCloud(dir_ + "/" + scans[s]->file);
+        } catch (const std::exception&) {
+          return false;  // integrated, then gone: its near part stays, its far part is left out
+        }
+        inMap(scan, scans[s]->pose, scans[s]->sensor_origin, &points, &origin);
+        return true;
+      },
+      map_.config().threads);
   return copy;
 }
 

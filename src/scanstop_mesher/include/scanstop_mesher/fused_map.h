@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -131,13 +132,15 @@ class FusedMap {
   /// arithmetic while no weight reached max_weight. No voxel is created. Returns the readings.
   size_t deintegrate(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin);
 
-  /// carveFar's walk, counted instead of applied (the incremental map, FusedMapTracker): each voxel's
-  /// free updates are added to (remove: taken from, down to 0) a count of its own that applyFar()
-  /// adds to the field; until then the field is the near integration's alone. Returns the voxels.
-  size_t countFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, bool remove = false);
-  /// Adds the counted free updates (countFar) to the field and clears the counts.
-  void applyFar();
-  /// A deep copy (grids, counts, stats).
+  /// Loads scan s of a run of scans in the map frame with its sensor origin; false: it cannot be read
+  /// (left out).
+  using ScanLoader = std::function<bool(size_t s, std::vector<Eigen::Vector3f>& points, Eigen::Vector3f& origin)>;
+  /// The far carving pass (carveFar) of scans [0, scans) after all of them were integrated, on
+  /// `threads` threads (runs of consecutive scans): each thread counts its free updates per voxel apart
+  /// (the field stays as it is while they walk), the counts are added at the end: carveFar of every
+  /// scan in exact arithmetic. Rethrows a loader's exception.
+  void carveFarAll(size_t scans, const ScanLoader& load, int threads);
+  /// A deep copy (grids, stats).
   FusedMap copy() const;
 
   /// Points on the zero crossing, one per surface cell (all 8 corners observed, a sign change):

@@ -6,10 +6,10 @@
 /// end of a mission then needs only the last scan's integration and the meshing, not a pass over
 /// every scan.
 ///
-/// The far carving pass (FusedMapConfig::carve_far) is counted per scan when it is integrated, through
-/// the voxels that exist at that moment (FusedMap::countFar), and applied to a copy when the map is
-/// taken (snapshot()). Unlike integrateMapDirectory's pass after all scans, a scan's beams do not carve
-/// the voxels that later scans create; measured against it in docs/benchmarks.md.
+/// The far carving pass (FusedMapConfig::carve_far) needs every scan's voxels (a beam carves the
+/// surfaces other scans made, also later ones): snapshot() runs it over all scans on a copy, on
+/// map_config.threads threads, so the snapshot is integrateMapDirectory's field (up to float rounding
+/// and the order of the scans).
 
 #include <cstdint>
 #include <map>
@@ -52,9 +52,10 @@ class FusedMapTracker {
   /// max_grid_mb (the map is then unusable: the caller falls back to integrateMapDirectory's slabs).
   FusedTrackerUpdate update(const std::string& dir);
 
-  /// The fused map with the counted far carving applied (a copy; the tracker goes on).
+  /// The fused map with the far carving pass over all scans (a copy; the tracker goes on). Reads the
+  /// scan files again for it.
   FusedMap snapshot() const;
-  /// The live map (near integration; the far carving counted, not applied).
+  /// The live map (the near integration only).
   const FusedMap& map() const { return map_; }
   size_t scans() const { return tracked_.size(); }
 
@@ -66,6 +67,7 @@ class FusedMapTracker {
   };
   FusedTrackerConfig config_;
   FusedMap map_;
+  std::string dir_;  ///< the map directory of the last update
   std::map<uint32_t, Tracked> tracked_;
 };
 
