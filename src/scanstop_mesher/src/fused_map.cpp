@@ -316,13 +316,29 @@ size_t FusedMap::integrateSigned(const std::vector<Eigen::Vector3f>& points, con
 
 namespace {
 
+/// The leaves of the field with a voxel nearer a surface than the truncation (a distance below it):
+/// the far pass walks only these. A free update leaves a voxel at +truncation where it is, so in a
+/// leaf of free voxels it would change weights alone, and no surface cell has its corners there.
+openvdb::BoolGrid::Ptr bandLeaves(const openvdb::FloatGrid& tsdf, float truncation) {
+  openvdb::BoolGrid::Ptr band = openvdb::BoolGrid::create(false);
+  openvdb::BoolGrid::Accessor acc = band->getAccessor();
+  for (auto it = tsdf.tree().cbeginLeaf(); it; ++it)
+    for (auto v = it->cbeginValueOn(); v; ++v)
+      if (*v < truncation) {
+        acc.touchLeaf(it->origin());
+        break;
+      }
+  return band;
+}
+
 /// The far carving pass's walk of one scan (FusedMapConfig::carve_far): for every voxel farther than
 /// truncation_m + carve_m before a beam's hit that exists in `weight` (weight above 0), in its slab,
 /// apply(leaf origin, offset in the leaf). Beams skip the leaves that do not exist. Returns the calls.
 template <class Apply>
-size_t walkFar(const openvdb::FloatGrid& weight_grid, const FusedMapConfig& config,
+size_t walkFar(const openvdb::FloatGrid& weight_grid, const openvdb::BoolGrid& band_grid, const FusedMapConfig& config,
                const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, Apply apply) {
   ConstAccessor weight = weight_grid.getConstAccessor();
+  openvdb::BoolGrid::ConstAccessor band = band_grid.getConstAccessor();
   const double vs = config.voxel_m, near = config.truncation_m + config.carve_m;
   const int clip_lo = config.clip_x_min_voxel, clip_hi = config.clip_x_max_voxel;
   const Eigen::Vector3d o = origin.cast<double>();
@@ -339,6 +355,7 @@ size_t walkFar(const openvdb::FloatGrid& weight_grid, const FusedMapConfig& conf
     const Eigen::Vector3d ua = o / vs + half, ub = (o + (r - near) * dir) / vs + half;
     walkCells(ua / kLeaf, ub / kLeaf, [&](const Eigen::Vector3i& leaf, double s0, double s1) {
       const Coord leaf_origin(leaf.x() * kLeaf, leaf.y() * kLeaf, leaf.z() * kLeaf);
+      if (!band.probeConstLeaf(leaf_origin)) return;  // no voxel near a surface in this leaf
       const Leaf* const weight_leaf = weight.probeConstLeaf(leaf_origin);
       if (!weight_leaf) return;
       walkCells(ua + s0 * (ub - ua), ua + s1 * (ub - ua), [&](const Eigen::Vector3i& v, double, double) {
@@ -393,14 +410,16 @@ size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eige
   Leaf* tsdf_leaf = nullptr;
   Leaf* weight_leaf = nullptr;
   Coord cached(std::numeric_limits<int>::min(), 0, 0);
-  const size_t updates = walkFar(*grids_->weight, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
-    if (leaf != cached) {
-      weight_leaf = weight.probeLeaf(leaf);
-      tsdf_leaf = tsdf.touchLeaf(leaf);  // exists with the weight's (integrate())
-      cached = leaf;
-    }
-    freeUpdates(tsdf_leaf, weight_leaf, at, 1.0f, free_value, max_w);
-  });
+  const openvdb::BoolGrid::Ptr band = bandLeaves(*grids_->tsdf, static_cast<float>(config_.truncation_m));
+  const size_t updates =
+      walkFar(*grids_->weight, *band, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
+        if (leaf != cached) {
+          weight_leaf = weight.probeLeaf(leaf);
+          tsdf_leaf = tsdf.touchLeaf(leaf);  // exists with the weight's (integrate())
+          cached = leaf;
+        }
+        freeUpdates(tsdf_leaf, weight_leaf, at, 1.0f, free_value, max_w);
+      });
   stats_.voxel_updates += updates;
   stats_.integrate_seconds += elapsed(t0);
   return updates;
@@ -414,6 +433,7 @@ void FusedMap::carveFarAll(size_t scans, const ScanLoader& load, int threads) {
   // while they walk); the counts are added at the end.
   std::vector<openvdb::FloatGrid::Ptr> counts(threads);
   std::vector<size_t> updates(threads, 0);
+  const openvdb::BoolGrid::Ptr band = bandLeaves(*grids_->tsdf, static_cast<float>(config_.truncation_m));
   runInThreads(threads, [&](int t) {
     counts[t] = openvdb::FloatGrid::create(0.0f);
     openvdb::FloatGrid::Accessor count = counts[t]->getAccessor();
@@ -423,7 +443,7 @@ void FusedMap::carveFarAll(size_t scans, const ScanLoader& load, int threads) {
     Eigen::Vector3f origin;
     for (size_t s = first(t); s < first(t + 1); ++s) {
       if (!load(s, points, origin)) continue;
-      updates[t] += walkFar(*grids_->weight, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
+      updates[t] += walkFar(*grids_->weight, *band, config_, points, origin, [&](const Coord& leaf, openvdb::Index at) {
         if (leaf != cached) {
           count_leaf = count.touchLeaf(leaf);
           cached = leaf;
