@@ -213,6 +213,13 @@ FusedTrackerUpdate BpaMesherNode::updateTracker(const char* why) {
     malloc_trim(0);
   } catch (const IoError& e) {
     ROS_WARN_THROTTLE(30.0, "bpa_mesher_node: fused map: %s", e.what());  // tried again at the next change
+  } catch (const std::exception& e) {                                     // nothing may leave the tracker's thread
+    ROS_WARN(
+        "bpa_mesher_node: the fused map kept during the mission failed (%s): dropped; build_mesh fuses every "
+        "scan then",
+        e.what());
+    tracker_.reset();
+    malloc_trim(0);
   }
   return u;
 }
@@ -250,13 +257,20 @@ bool BpaMesherNode::buildFromTracker(const MesherConfig& mc, const std::string& 
   const double mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_mesh).count();
   std::vector<std::string> skipped;
   const std::string vdb = vdbPath(output);
-  try {
-    fused.save(vdb);
-  } catch (const IoError& e) {
-    ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", e.what());
-    skipped.push_back(std::string("the fused map was not saved: ") + e.what());
-  }
+  std::string save_problem;
+  std::thread saver([&] {  // written while the mesh is decimated
+    try {
+      fused.save(vdb);
+    } catch (const IoError& e) {
+      save_problem = e.what();
+    }
+  });
   const std::string decimated = decimate(mesh);
+  saver.join();
+  if (!save_problem.empty()) {
+    ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", save_problem.c_str());
+    skipped.push_back("the fused map was not saved: " + save_problem);
+  }
   publishFusedSurface(surface);
   std::ostringstream msg;
   msg << mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << scans

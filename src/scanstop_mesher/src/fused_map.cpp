@@ -380,8 +380,8 @@ inline void freeUpdates(Leaf* tsdf_leaf, Leaf* weight_leaf, openvdb::Index at, f
   weight_leaf->setValueOn(at, std::min(w + n, max_w));
 }
 
-/// Runs work(t) for t in [0, threads) on as many threads (the caller's is the first); rethrows the
-/// first thread's exception (in thread order) after all are done.
+}  // namespace
+
 void runInThreads(int threads, const std::function<void(int)>& work) {
   std::vector<std::exception_ptr> failed(threads);
   const auto guarded = [&](int t) {
@@ -398,8 +398,6 @@ void runInThreads(int threads, const std::function<void(int)>& work) {
   for (const std::exception_ptr& e : failed)
     if (e) std::rethrow_exception(e);
 }
-
-}  // namespace
 
 size_t FusedMap::carveFar(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin) {
   if (!origin.allFinite()) throw ConfigError("sensor origin " + vecText(origin) + " is not finite");

@@ -107,8 +107,11 @@ TEST(FusedMapTracker, FollowsNewScansAndMovedPoses) {
 
   // The same field as a map built afresh at the new poses (the near integration; the far carving
   // pass runs over all scans when the map is taken).
-  FusedMapTracker fresh(missionConfig());
-  fresh.update(tmp.path + "/map");
+  // (Its two new scans on two threads, each into grids of its own, merged.)
+  FusedMapConfig two_threads = missionConfig();
+  two_threads.threads = 2;
+  FusedMapTracker fresh(two_threads);
+  EXPECT_EQ(fresh.update(tmp.path + "/map").integrated, 2u);
   const FieldDifference d = compare(fresh.map(), tracker.map());
   EXPECT_GT(d.seen, d.samples / 20);
   EXPECT_EQ(d.weights, 0u);

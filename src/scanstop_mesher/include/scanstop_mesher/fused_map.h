@@ -205,6 +205,10 @@ class FusedMap {
 /// Returns the number of scans integrated.
 size_t integrateMapDirectory(FusedMap& map, const std::string& dir, std::vector<std::string>* skipped = nullptr);
 
+/// Runs work(t) for t in [0, threads) on as many threads (the caller's is the first); rethrows the
+/// first thread's exception (in thread order) after all are done.
+void runInThreads(int threads, const std::function<void(int)>& work);
+
 /// A mesh of a map directory made through its fused map (bpa_mesher_node's `mesh_method`).
 struct FusedMesh {
   TriangleMesh mesh;
