@@ -31,6 +31,15 @@ double jsonValue(const std::string& json, const std::string& key) {
 
 using test::writeRoomMap;
 
+/// Distance [m] of a point to the synthetic room's walls, floor, ceiling or box (the nearest).
+float offRoom(const Eigen::Vector3f& v) {
+  const test::Box room = test::roomBounds(), box = test::roomObstacle();
+  float d = 1e9f;
+  for (int a = 0; a < 3; ++a) d = std::min({d, std::abs(v[a] - room.lo[a]), std::abs(v[a] - room.hi[a])});
+  const Eigen::Vector3f q = v.cwiseMax(box.lo).cwiseMin(box.hi);
+  return std::min(d, (q - v).norm());
+}
+
 }  // namespace
 
 TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
@@ -51,15 +60,11 @@ TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
   EXPECT_EQ(static_cast<double>(mc.faces.size()), triangles);
   EXPECT_EQ(mc.normals.size(), mc.vertices.size());
   // Every vertex lies on the room's walls, floor, ceiling or the box (within a voxel).
-  const test::Box room = test::roomBounds(), box = test::roomObstacle();
   size_t off = 0;
   float worst = 0.0f;
   Eigen::Vector3f worst_at = Eigen::Vector3f::Zero();
   for (const auto& v : mc.vertices) {
-    float d = 1e9f;
-    for (int a = 0; a < 3; ++a) d = std::min({d, std::abs(v[a] - room.lo[a]), std::abs(v[a] - room.hi[a])});
-    const Eigen::Vector3f q = v.cwiseMax(box.lo).cwiseMin(box.hi);
-    d = std::min(d, (q - v).norm());
+    const float d = offRoom(v);
     off += d > 0.02f;
     if (d > worst) {
       worst = d;
@@ -85,13 +90,7 @@ TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
   EXPECT_LT(static_cast<double>(dec.faces.size()), triangles / 5);
   EXPECT_EQ(jsonValue(r.out, "nonmanifold_edges"), 0);
   size_t dec_off = 0;
-  for (const auto& v : dec.vertices) {
-    float d = 1e9f;
-    for (int a = 0; a < 3; ++a) d = std::min({d, std::abs(v[a] - room.lo[a]), std::abs(v[a] - room.hi[a])});
-    const Eigen::Vector3f q = v.cwiseMax(box.lo).cwiseMin(box.hi);
-    d = std::min(d, (q - v).norm());
-    dec_off += d > 0.02f;
-  }
+  for (const auto& v : dec.vertices) dec_off += offRoom(v) > 0.02f;
   std::printf("decimated: %zu of %zu triangles; %zu of %zu vertices more than 2 cm off the room\n", dec.faces.size(),
               static_cast<size_t>(triangles), dec_off, dec.vertices.size());
   EXPECT_LT(dec_off, dec.vertices.size() / 200);
