@@ -108,6 +108,24 @@ TEST(FuseMapCli, FusesAMapDirectoryIntoThreeOutputs) {
   EXPECT_EQ(static_cast<double>(readMesh(tmp.path + "/bpa.stl").faces.size()), jsonValue(r.out, "triangles"));
 }
 
+TEST(FuseMapCli, AMapTooLargeForTheBoundIsMeshedInSlabs) {
+  TempDir tmp("fuse_map_cli_test");
+  writeRoomMap(tmp.path + "/map");
+  CliRun whole = run(tmp.path + "/map " + tmp.path + "/whole.ply --carve 0.2 --json");
+  ASSERT_EQ(whole.status, 0) << whole.out;
+  EXPECT_EQ(jsonValue(whole.out, "slabs"), 1);
+  CliRun r = run(tmp.path + "/map " + tmp.path + "/slabs.ply --carve 0.2 --max-grid-mb 20 --json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_GT(jsonValue(r.out, "slabs"), 1) << r.out;
+  EXPECT_LE(jsonValue(r.out, "memory_bytes"), 20.0 * 1048576) << r.out;
+  EXPECT_EQ(static_cast<double>(readMesh(tmp.path + "/slabs.ply").faces.size()), jsonValue(r.out, "triangles"));
+  EXPECT_NEAR(jsonValue(r.out, "decimated_from"), jsonValue(whole.out, "decimated_from"), 2) << "the whole map's mesh";
+  EXPECT_EQ(jsonValue(r.out, "nonmanifold_edges"), 0);
+  r = run(tmp.path + "/map " + tmp.path + "/points.ply --mesh points --carve 0.2 --max-grid-mb 20");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("in slabs along x only a mesh without --vdb is built"), std::string::npos) << r.out;
+}
+
 TEST(FuseMapCli, BadArgumentsAndMapsAreNamed) {
   TempDir tmp("fuse_map_cli_test");
   CliRun r = run("--help");

@@ -41,8 +41,9 @@ constexpr const char* kUsage =
     "  --splat       lateral reach of each reading's band [voxels], [0, 3] (default 0: the crossed voxels;\n"
     "                1: 3 x 3 voxels across the beam, for beams up to 3 voxels apart, less accurate)\n"
     "  --min-weight  readings a voxel needs to count as seen, [1, 10000] (default 2)\n"
-    "  --max-grid-mb refuse (exit 1) once the fused grids would need more memory [MB], [1, 1e6] (default\n"
-    "                500): a voxel too fine for the map ends at once instead of filling the machine's memory\n"
+    "  --max-grid-mb bound on the fused grids' memory [MB], [1, 1e6] (default 500): a map whose grids would\n"
+    "                need more as a whole is meshed in slabs along x (the same mesh; not with --mesh points or\n"
+    "                --vdb: exit 1); one whose 1 m slabs do not fit either (a voxel too fine) ends at once, exit 1\n"
     "  --threads     threads integrating the scans, [1, 16] (default 2): each into grids of its own (within\n"
     "                --max-grid-mb / threads), merged\n"
     "  --mesh        marching_cubes (default): volumeToMesh of the field; points: the fused surface points\n"
@@ -58,6 +59,48 @@ constexpr const char* kUsage =
 
 double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// A map too large for --max-grid-mb as a whole: meshed in slabs along x (meshFusedMapDirectory), the
+/// same mesh as the whole map's; prints the report. Returns the exit status.
+int meshInSlabs(const std::string& map_dir, const std::string& output, const std::string& mode,
+                const FusedMapConfig& config, const MesherConfig& bpa_config, const DecimateConfig& decimate,
+                bool skip_bad, bool json) {
+  std::vector<std::string> skipped;
+  FusedMesh r = meshFusedMapDirectory(map_dir, config, mode == "bpa" ? "fused_bpa" : "marching_cubes", bpa_config,
+                                      skip_bad ? &skipped : nullptr);
+  for (const std::string& w : skipped) std::cerr << "fuse_map: warning: skipped: " << w << "\n";
+  const DecimateStats decimated = mode == "marching_cubes" ? decimateMesh(r.mesh, decimate) : DecimateStats();
+  writeMesh(output, r.mesh);
+  const MeshTopology t = analyzeTopology(r.mesh);
+  if (json) {
+    std::cout << "{\"map\": " << jsonString(map_dir) << ", \"output\": " << jsonString(output)
+              << ", \"mesh\": " << jsonString(mode) << ", \"scans\": " << r.scans
+              << ", \"voxel_m\": " << jsonNumber(config.voxel_m) << ", \"slabs\": " << r.slabs
+              << ", \"voxels\": " << r.voxels << ", \"memory_bytes\": " << r.memory_bytes
+              << ", \"integrate_seconds\": " << jsonNumber(r.integrate_s)
+              << ", \"mesh_seconds\": " << jsonNumber(r.mesh_s) << ", \"surface_points\": " << r.surface_points
+              << ", \"decimated_from\": " << decimated.faces_before << ", \"triangles\": " << t.faces
+              << ", \"vertices\": " << t.vertices << ", \"boundary_edges\": " << t.boundary_edges
+              << ", \"nonmanifold_edges\": " << t.nonmanifold_edges
+              << ", \"nonmanifold_vertices\": " << t.nonmanifold_vertices << ", \"components\": " << t.components << "}"
+              << std::endl;
+  } else {
+    std::cout << "map:          " << map_dir << " (" << r.scans << " scans)\n"
+              << "fused:        in " << r.slabs
+              << " slabs along x (the whole map's grids would pass --max-grid-mb = " << config.max_grid_mb
+              << " MB): " << r.voxels << " voxels, the largest slab " << r.memory_bytes / 1048576.0 << " MB; voxel "
+              << config.voxel_m << " m\n"
+              << "integration:  " << r.integrate_s << " s\n"
+              << "mesh:         " << mode << ", " << t.faces << " triangles, " << t.vertices << " vertices, "
+              << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges << " non-manifold edges\n";
+    if (decimated.collapses > 0)
+      std::cout << "decimated:    from " << decimated.faces_before << " triangles within " << decimate.max_error_m
+                << " m in " << decimated.seconds << " s\n";
+    std::cout << "meshing:      " << r.mesh_s << " s\n"
+              << "written:      " << output << std::endl;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -111,7 +154,16 @@ int main(int argc, char** argv) {
     }
     FusedMap fused(config);
     std::vector<std::string> skipped;
-    const size_t scans = integrateMapDirectory(fused, map_dir, skip_bad ? &skipped : nullptr);
+    size_t scans = 0;
+    try {
+      scans = integrateMapDirectory(fused, map_dir, skip_bad ? &skipped : nullptr);
+    } catch (const GridBoundError& e) {
+      // Too large for --max-grid-mb as a whole: a mesh is built in slabs along x (meshFusedMapDirectory).
+      if (mode == "points" || !vdb.empty())
+        throw GridBoundError(std::string(e.what()) + "; in slabs along x only a mesh without --vdb is built");
+      fused = FusedMap(config);  // the grids built so far are gone
+      return meshInSlabs(map_dir, output, mode, config, bpa_config, decimate, skip_bad, json);
+    }
     for (const std::string& w : skipped) std::cerr << "fuse_map: warning: skipped: " << w << "\n";
     const FusedMapStats& st = fused.stats();
 
@@ -149,8 +201,9 @@ int main(int argc, char** argv) {
                 << ", \"skipped_points\": " << st.skipped_points << ", \"voxel_m\": " << jsonNumber(config.voxel_m)
                 << ", \"truncation_m\": " << jsonNumber(config.truncation_m)
                 << ", \"carve_m\": " << jsonNumber(config.carve_m) << ", \"splat\": " << config.splat
-                << ", \"voxels\": " << fused.activeVoxels() << ", \"observed_voxels\": " << fused.observedVoxels()
-                << ", \"memory_bytes\": " << fused.memoryBytes() << ", \"voxel_updates\": " << st.voxel_updates
+                << ", \"slabs\": 1, \"voxels\": " << fused.activeVoxels()
+                << ", \"observed_voxels\": " << fused.observedVoxels() << ", \"memory_bytes\": " << fused.memoryBytes()
+                << ", \"voxel_updates\": " << st.voxel_updates
                 << ", \"integrate_seconds\": " << jsonNumber(st.integrate_seconds)
                 << ", \"mesh_seconds\": " << jsonNumber(mesh_seconds) << ", \"surface_points\": " << surface_points
                 << ", \"decimated_from\": " << decimated.faces_before
