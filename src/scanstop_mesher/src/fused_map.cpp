@@ -1,5 +1,7 @@
 #include "scanstop_mesher/fused_map.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -791,10 +793,12 @@ std::pair<double, double> mapXRange(const std::string& dir) {
   return {lo, hi};
 }
 
-/// meshFusedMapDirectory in slabs along x, each built alone (FusedMapConfig::clip_x_*_voxel) and
-/// halved while it passes max_grid_mb.
-FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, const std::string& method,
-                      const MesherConfig& bpa, std::vector<std::string>* skipped, double min_slab_m) {
+}  // namespace
+
+FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& config, const std::string& method,
+                              const MesherConfig& bpa, std::vector<std::string>* skipped, double min_slab_m) {
+  if (!isFusedMeshMethod(method))
+    throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
   const double vs = config.voxel_m;
   const std::pair<double, double> x = mapXRange(dir);
   if (!(x.first <= x.second)) throw IoError(dir, "no readable point in its scans");
@@ -813,7 +817,8 @@ FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, cons
     FusedMapConfig slab = config;
     slab.clip_x_min_voxel = a - 1;
     slab.clip_x_max_voxel = b + 2;
-    FusedMap fused(slab);
+    auto held = std::make_unique<FusedMap>(slab);
+    FusedMap& fused = *held;
     std::vector<std::string> later;  // every pass names the same skipped scans: the first whole one says it
     const size_t named = skipped ? skipped->size() : 0;
     try {
@@ -822,6 +827,8 @@ FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, cons
       if (skipped) skipped->resize(named);  // a pass that stopped at the bound: the next one names them
       if (b - a < 2 * min_cells)
         throw GridBoundError(std::string(e.what()) + " (in a slab of " + std::to_string((b - a) * vs) + " m along x)");
+      held.reset();    // the halves must not share the bound with the grids that passed it
+      malloc_trim(0);  // nor build their grids around the freed ones' fragments
       build(a, a + (b - a) / 2);
       build(a + (b - a) / 2, b);
       return;
@@ -874,10 +881,10 @@ FusedMesh meshInSlabs(const std::string& dir, const FusedMapConfig& config, cons
   }
   out.mesh_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.surface = std::move(surface.points);
+  if (out.mesh.faces.empty())
+    throw std::runtime_error("nothing to mesh: the fused map of " + dir + " holds no observed surface");
   return out;
 }
-
-}  // namespace
 
 FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
                                 const MesherConfig& bpa, std::vector<std::string>* skipped,
@@ -911,7 +918,8 @@ FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& co
   } catch (const GridBoundError&) {
     // Too large as a whole: in slabs (the scans' problems are named again by the slabs' pass).
     if (skipped) skipped->resize(skipped_before);
-    out = meshInSlabs(dir, config, method, bpa, skipped, min_slab_m);
+    malloc_trim(0);  // the whole map's grids are gone: the slabs' grids start from a trimmed heap
+    out = meshFusedMapInSlabs(dir, config, method, bpa, skipped, min_slab_m);
   }
   if (out.mesh.faces.empty())
     throw std::runtime_error("nothing to mesh: the fused map of " + dir + " holds no observed surface");

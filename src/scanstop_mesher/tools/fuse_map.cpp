@@ -4,6 +4,8 @@
 /// Integrates every scan of a map directory into the fused TSDF map (fused_map.h) and writes its
 /// surface: Marching Cubes of the field, the fused surface points with normals, or Ball Pivoting of
 /// those points.
+#include <malloc.h>
+
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -61,14 +63,14 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// A map too large for --max-grid-mb as a whole: meshed in slabs along x (meshFusedMapDirectory), the
+/// A map too large for --max-grid-mb as a whole: meshed in slabs along x (meshFusedMapInSlabs), the
 /// same mesh as the whole map's; prints the report. Returns the exit status.
 int meshInSlabs(const std::string& map_dir, const std::string& output, const std::string& mode,
                 const FusedMapConfig& config, const MesherConfig& bpa_config, const DecimateConfig& decimate,
                 bool skip_bad, bool json) {
   std::vector<std::string> skipped;
-  FusedMesh r = meshFusedMapDirectory(map_dir, config, mode == "bpa" ? "fused_bpa" : "marching_cubes", bpa_config,
-                                      skip_bad ? &skipped : nullptr);
+  FusedMesh r = meshFusedMapInSlabs(map_dir, config, mode == "bpa" ? "fused_bpa" : "marching_cubes", bpa_config,
+                                    skip_bad ? &skipped : nullptr);
   for (const std::string& w : skipped) std::cerr << "fuse_map: warning: skipped: " << w << "\n";
   const DecimateStats decimated = mode == "marching_cubes" ? decimateMesh(r.mesh, decimate) : DecimateStats();
   writeMesh(output, r.mesh);
@@ -158,10 +160,11 @@ int main(int argc, char** argv) {
     try {
       scans = integrateMapDirectory(fused, map_dir, skip_bad ? &skipped : nullptr);
     } catch (const GridBoundError& e) {
-      // Too large for --max-grid-mb as a whole: a mesh is built in slabs along x (meshFusedMapDirectory).
+      // Too large for --max-grid-mb as a whole: a mesh is built in slabs along x (meshFusedMapInSlabs).
       if (mode == "points" || !vdb.empty())
         throw GridBoundError(std::string(e.what()) + "; in slabs along x only a mesh without --vdb is built");
-      fused = FusedMap(config);  // the grids built so far are gone
+      fused = FusedMap(config);  // the grids built so far are gone, their memory too
+      malloc_trim(0);
       return meshInSlabs(map_dir, output, mode, config, bpa_config, decimate, skip_bad, json);
     }
     for (const std::string& w : skipped) std::cerr << "fuse_map: warning: skipped: " << w << "\n";

@@ -231,12 +231,18 @@ bool isFusedMeshMethod(const std::string& method);
 /// stands). A map whose grids would pass config.max_grid_mb is built and meshed in slabs along x
 /// instead (halved until each fits, down to min_slab_m; the slabs' meshes meet exactly and are
 /// welded, then pinched fans dropped over the whole): the same mesh within float rounding, memory
-/// bounded by one slab; no .vdb then (save_problem says so). Throws GridBoundError when a
+/// bounded by one slab; no .vdb then (slabs > 1 says so). Throws GridBoundError when a
 /// min_slab_m slab does not fit, std::invalid_argument for another method and std::runtime_error
 /// when the fused map holds no observed surface.
 FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
                                 const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr,
                                 const std::string& save_path = "", double min_slab_m = 1.0);
+/// meshFusedMapDirectory's slabs without its attempt at the whole map first (for a caller that saw
+/// the whole pass max_grid_mb): two halves along x of the map's readings, each built alone
+/// (FusedMapConfig::clip_x_*_voxel) and halved again while it passes the bound; same errors.
+FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& config, const std::string& method,
+                              const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr,
+                              double min_slab_m = 1.0);
 
 }  // namespace mesher
 }  // namespace scanstop
