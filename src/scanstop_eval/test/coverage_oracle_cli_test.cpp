@@ -9,7 +9,7 @@
 
 #include "scanstop_common/cli_test.h"
 #include "scanstop_common/stl_io.h"
-#include "scanstop_sim/world_builder.h"
+#include "test_rooms.h"
 
 namespace {
 
@@ -20,14 +20,8 @@ CliRun run(const std::string& cmd) { return scanstop::test_util::runCommand(cmd)
 
 /// A 3 x 3 m room, interior [0, 3]^2, its floor reaching 0.5 m beyond the walls, as an STL file.
 std::string writeSmallRoom(const TempDir& tmp) {
-  scanstop::sim::WorldBuilder b(2.5);
-  b.floorAndCeiling(-0.6, -0.6, 3.6, 3.6);
-  b.wallX(-0.05, -0.1, 3.1);
-  b.wallX(3.05, -0.1, 3.1);
-  b.wallY(-0.05, -0.1, 3.1);
-  b.wallY(3.05, -0.1, 3.1);
   const std::string path = tmp.path + "/small_room.stl";
-  scanstop::writeStlBinary(path, b.mesh());
+  scanstop::writeStlBinary(path, scanstop::test_util::squareRoom(3.0, 0.6));
   return path;
 }
 

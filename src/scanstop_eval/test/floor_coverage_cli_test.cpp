@@ -11,7 +11,7 @@
 #include "scanstop_common/cli_test.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
-#include "scanstop_sim/world_builder.h"
+#include "test_rooms.h"
 
 namespace {
 
@@ -22,15 +22,7 @@ using scanstop::test_util::TempDir;
 CliRun run(const std::string& cmd) { return scanstop::test_util::runCommand(cmd); }
 
 /// A 4 x 4 m room, interior [0, 4]^2.
-scanstop::TriangleMesh room() {
-  scanstop::sim::WorldBuilder b(2.5);
-  b.floorAndCeiling(-0.5, -0.5, 4.5, 4.5);
-  b.wallX(-0.05, -0.1, 4.1);
-  b.wallX(4.05, -0.1, 4.1);
-  b.wallY(-0.05, -0.1, 4.1);
-  b.wallY(4.05, -0.1, 4.1);
-  return b.mesh();
-}
+scanstop::TriangleMesh room() { return scanstop::test_util::squareRoom(4.0, 0.5); }
 
 /// A map of two scans in the room's map frame (the world moved by the start (2, 2)): floor points on a
 /// 5 cm lattice within 1.2 m of each scan and the walls' faces up to 1 m high.

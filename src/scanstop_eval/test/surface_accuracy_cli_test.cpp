@@ -10,7 +10,7 @@
 #include "scanstop_common/cloud_io.h"
 #include "scanstop_common/map_dir.h"
 #include "scanstop_common/stl_io.h"
-#include "scanstop_sim/world_builder.h"
+#include "test_rooms.h"
 
 namespace {
 
@@ -20,15 +20,7 @@ using scanstop::test_util::TempDir;
 CliRun run(const std::string& cmd) { return scanstop::test_util::runCommand(cmd); }
 
 /// A 3 x 3 m room, interior [0, 3]^2 (the east wall's inner face at x = 3).
-scanstop::TriangleMesh smallRoom() {
-  scanstop::sim::WorldBuilder b(2.5);
-  b.floorAndCeiling(-0.6, -0.6, 3.6, 3.6);
-  b.wallX(-0.05, -0.1, 3.1);
-  b.wallX(3.05, -0.1, 3.1);
-  b.wallY(-0.05, -0.1, 3.1);
-  b.wallY(3.05, -0.1, 3.1);
-  return b.mesh();
-}
+scanstop::TriangleMesh smallRoom() { return scanstop::test_util::squareRoom(3.0, 0.6); }
 
 const std::string kTool = SURFACE_ACCURACY_EXE;
 const std::string kStart = " --start 1.5,1.5,0";  // the map frame: the world moved by (1.5, 1.5)

@@ -58,6 +58,25 @@ TEST(ScanWorldCli, BadArgumentsAreNamedAndNothingIsWritten) {
       << r.out;
 }
 
+// --mixed-pixels turns on the scanner's mixed pixels at depth steps (the bench of the fused map
+// scans artifacts_room with them); the world's materials come from the YAML next to the STL.
+TEST(ScanWorldCli, MixedPixelsAreCountedWhenAskedFor) {
+  TempDir tmp("sim_tools_cli_test");
+  const std::string base = kScanWorld + " " + std::string(SCANSTOP_WORLDS_DIR) + "/artifacts_room.stl " + tmp.path +
+                           "/scan.pcd --pose 1.5,1.5,0 --planes 50";
+  CliRun r = run(base + " --mixed-pixels");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const size_t at = r.out.find(" mixed pixels");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const size_t from = r.out.rfind(", ", at);
+  ASSERT_NE(from, std::string::npos) << r.out;
+  EXPECT_GT(std::stoul(r.out.substr(from + 2, at - from - 2)), 10u) << r.out;  // at the room's depth steps
+  EXPECT_TRUE(exists(tmp.path + "/scan.pcd"));
+  r = run(base);
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(r.out.find("mixed pixels"), std::string::npos) << r.out;
+}
+
 TEST(MakeWorldsCli, BadSeedsAndMissingDirectoriesAreNamed) {
   TempDir tmp("sim_tools_cli_test");
   CliRun r = run(kMakeWorlds + " " + tmp.path + " --furnished 1x");

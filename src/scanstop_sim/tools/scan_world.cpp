@@ -1,4 +1,4 @@
-// scan_world WORLD OUT.pcd --pose x,y,yaw [--planes N] [--profile perfect|thesis] [--seed S]
+// scan_world WORLD OUT.pcd --pose x,y,yaw [--planes N] [--profile perfect|thesis] [--seed S] [--mixed-pixels]
 // Takes one full 3D scan in an STL world without ROS and writes it as an organized PCD in the robot
 // frame (base_link; x y z range, NaN for invalid readings).
 #include <iostream>
@@ -18,8 +18,11 @@ namespace {
 constexpr const char* kUsage =
     "usage: scan_world WORLD.stl OUT.pcd --pose x,y,yaw [--planes 50|100|200|400] [--profile perfect|thesis] [--seed "
     "S]\n"
-    "  --pose  robot pose in the world [m, m, rad], |x|, |y| <= 10000 (required)\n"
-    "  --seed  0-9223372036854775807 (default 1)\n"
+    "                  [--mixed-pixels]\n"
+    "  --pose          robot pose in the world [m, m, rad], |x|, |y| <= 10000 (required)\n"
+    "  --seed          0-9223372036854775807 (default 1)\n"
+    "  --mixed-pixels  mixed pixels at depth steps (sim_node's scanner/mixed_pixels; default off)\n"
+    "  The world's materials are read from WORLD.materials.yaml next to it when that exists.\n"
     "exit status: 0 written, 2 bad arguments, 1 unreadable world or unwritable output\n";
 
 }  // namespace
@@ -29,6 +32,7 @@ int main(int argc, char** argv) {
   std::string world_path, out_path, profile = "perfect", planes_text = "400";
   std::optional<Pose2D> pose;
   long seed = 1;
+  bool mixed_pixels = false;
   Options opts("scan_world", kUsage);
   opts.positional("WORLD.stl", world_path)
       .positional("OUT.pcd", out_path)
@@ -39,7 +43,8 @@ int main(int argc, char** argv) {
               })
       .choice("--planes", planes_text, {"50", "100", "200", "400"})
       .choice("--profile", profile, {"perfect", "thesis"})
-      .integer("--seed", seed, 0L, std::numeric_limits<long>::max());
+      .integer("--seed", seed, 0L, std::numeric_limits<long>::max())
+      .flag("--mixed-pixels", mixed_pixels);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   if (!pose) {
     std::cerr << "scan_world: --pose is required\n" << kUsage;
@@ -53,12 +58,15 @@ int main(int argc, char** argv) {
     scanstop::sim::SimConfig config;
     config.errors = scanstop::sim::makeProfile(profile);
     config.seed = static_cast<uint64_t>(seed);
+    config.scanner.mixed_pixels = mixed_pixels;
     scanstop::sim::Simulator sim(scanstop::sim::World::load(world_path), config, *pose);
     const scanstop::sim::ScanOutput scan = sim.scan(planes);
     scanstop::writeCloud(out_path, scan.cloud);
     std::cout << out_path << ": " << scan.cloud.height << " planes x " << scan.cloud.width << " beams, "
               << scan.valid_points << " valid points, " << scan.planes_dropped << " planes dropped, "
-              << scan.outliers_removed << " outliers removed\n";
+              << scan.outliers_removed << " outliers removed";
+    if (mixed_pixels) std::cout << ", " << scan.mixed_pixels << " mixed pixels";
+    std::cout << "\n";
   } catch (const std::exception& e) {
     std::cerr << "scan_world: " << e.what() << "\n";
     return 1;
