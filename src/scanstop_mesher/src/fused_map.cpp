@@ -685,12 +685,20 @@ void FusedMap::save(const std::string& path) const {
   commitTemporaryFile(tmp, path);
 }
 
-size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vector<std::string>* skipped) {
+size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vector<std::string>* skipped,
+                             const std::vector<uint8_t>* only) {
   const auto t0 = std::chrono::steady_clock::now();
   const double seconds_before = fused.stats_.integrate_seconds;
   const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, skipped);
   const MapDirectory& map = *opened;
   const size_t n = map.size();
+  if (only && only->size() != n)
+    throw std::invalid_argument("integrateMapDirectory: " + std::to_string(only->size()) + " scans chosen of " +
+                                std::to_string(n));
+  // Scans left out (`only`) are not read; the runs of the threads stay those of all n scans, so that a
+  // voxel gets the same updates in the same order whichever scans are left out around it.
+  const auto chosen = [&](size_t s) { return !only || (*only)[s]; };
+  if (only && std::none_of(only->begin(), only->end(), [](uint8_t c) { return c != 0; })) return 0;
   const int threads = static_cast<int>(std::min<size_t>(std::max(1, fused.config().threads), n));
   // Thread t takes the scans [first(t), first(t + 1)): runs of consecutive scans.
   const auto first = [&](int t) { return n * static_cast<size_t>(t) / static_cast<size_t>(threads); };
@@ -730,6 +738,7 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
       std::vector<Eigen::Vector3f> points;
       Eigen::Vector3f origin;
       for (size_t s = first(t); s < first(t + 1); ++s) {
+        if (!chosen(s)) continue;
         std::string problem;
         if (!load(s, points, origin, problem)) {
           problems[t].push_back(problem);
@@ -758,7 +767,8 @@ size_t integrateMapDirectory(FusedMap& fused, const std::string& dir, std::vecto
         n,
         [&](size_t s, std::vector<Eigen::Vector3f>& points, Eigen::Vector3f& origin) {
           std::string problem;
-          return load(s, points, origin, problem);  // a scan that cannot be read was named in the near pass
+          // (a scan that cannot be read was named in the near pass)
+          return chosen(s) && load(s, points, origin, problem);
         },
         threads);
   fused.stats_.integrate_seconds = seconds_before + elapsed(t0);
@@ -769,12 +779,19 @@ bool isFusedMeshMethod(const std::string& method) { return method == "marching_c
 
 namespace {
 
-/// The x range [m] of a map directory's readings at their map poses (scans that cannot be read are
-/// skipped here: integrateMapDirectory names them).
-std::pair<double, double> mapXRange(const std::string& dir) {
+/// The x ranges [m] of a map directory's scans at their map poses: per scan, of its readings and its
+/// sensor origin (what its beams can reach; NaN for a scan that cannot be read: integrateMapDirectory
+/// names it), and of all readings.
+struct XExtents {
+  std::vector<std::pair<double, double>> scans;
+  double lo = std::numeric_limits<double>::infinity(), hi = -std::numeric_limits<double>::infinity();
+};
+XExtents mapXExtents(const std::string& dir) {
   std::vector<std::string> named_by_the_passes;
   const std::unique_ptr<const MapDirectory> opened = openMapDirectory(dir, &named_by_the_passes);
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  XExtents out;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  out.scans.assign(opened->size(), {nan, nan});
   for (size_t s = 0; s < opened->size(); ++s) {
     PointCloud scan;
     try {
@@ -782,15 +799,21 @@ std::pair<double, double> mapXRange(const std::string& dir) {
     } catch (const std::exception&) {
       continue;
     }
-    const Eigen::Isometry3f T = opened->scans()[s].map_pose.toIsometry3f();
+    const MapScanInfo& info = opened->scans()[s];
+    const Eigen::Isometry3f T = info.map_pose.toIsometry3f();
+    const double origin = (T * info.sensor_origin.cast<float>()).x();
+    double lo = origin, hi = origin;
     for (const Eigen::Vector3f& p : scan.points) {
       if (!p.allFinite()) continue;
       const double x = (T * p).x();
       lo = std::min(lo, x);
       hi = std::max(hi, x);
+      out.lo = std::min(out.lo, x);
+      out.hi = std::max(out.hi, x);
     }
+    out.scans[s] = {lo, hi};
   }
-  return {lo, hi};
+  return out;
 }
 
 }  // namespace
@@ -800,10 +823,14 @@ FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& conf
   if (!isFusedMeshMethod(method))
     throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
   const double vs = config.voxel_m;
-  const std::pair<double, double> x = mapXRange(dir);
-  if (!(x.first <= x.second)) throw IoError(dir, "no readable point in its scans");
-  const int first = static_cast<int>(std::floor(x.first / vs)) - 2,
-            last = static_cast<int>(std::floor(x.second / vs)) + 2;
+  const XExtents x = mapXExtents(dir);
+  if (!(x.lo <= x.hi)) throw IoError(dir, "no readable point in its scans");
+  const int first = static_cast<int>(std::floor(x.lo / vs)) - 2, last = static_cast<int>(std::floor(x.hi / vs)) + 2;
+  // How far beyond its beams' x range a scan can update a voxel: the band behind the hit, the lateral
+  // splat, half a voxel, and a voxel to spare.
+  const double reach = config.truncation_m + (config.splat + 2) * vs;
+  size_t readable = 0;
+  for (const auto& e : x.scans) readable += std::isfinite(e.first) ? 1 : 0;
   const int min_cells = std::max(8, static_cast<int>(std::ceil(min_slab_m / vs)));
   FusedMesh out;
   out.slabs = 0;
@@ -821,8 +848,15 @@ FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& conf
     FusedMap& fused = *held;
     std::vector<std::string> later;  // every pass names the same skipped scans: the first whole one says it
     const size_t named = skipped ? skipped->size() : 0;
+    // Only the scans whose beams reach the slab (and those that cannot be read, to be named).
+    const double x_lo = (slab.clip_x_min_voxel - 0.5) * vs, x_hi = (slab.clip_x_max_voxel + 0.5) * vs;
+    std::vector<uint8_t> only(x.scans.size());
+    for (size_t s = 0; s < only.size(); ++s)
+      only[s] =
+          !std::isfinite(x.scans[s].first) || (x.scans[s].second + reach >= x_lo && x.scans[s].first - reach <= x_hi);
     try {
-      out.scans = integrateMapDirectory(fused, dir, first_pass ? skipped : (skipped ? &later : nullptr));
+      const size_t read = integrateMapDirectory(fused, dir, first_pass ? skipped : (skipped ? &later : nullptr), &only);
+      out.scans_read += read;
     } catch (const GridBoundError& e) {
       if (skipped) skipped->resize(named);  // a pass that stopped at the bound: the next one names them
       if (b - a < 2 * min_cells)
@@ -834,6 +868,7 @@ FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& conf
       return;
     }
     first_pass = false;
+    out.scans = readable;
     ++out.slabs;
     out.integrate_s += fused.stats().integrate_seconds;
     out.voxels += fused.activeVoxels();
@@ -896,6 +931,7 @@ FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& co
   try {
     FusedMap fused(config);
     out.scans = integrateMapDirectory(fused, dir, skipped);
+    out.scans_read = out.scans;
     out.integrate_s = fused.stats().integrate_seconds;
     out.voxels = fused.activeVoxels();
     out.memory_bytes = fused.memoryBytes();

@@ -79,8 +79,8 @@ int meshInSlabs(const std::string& map_dir, const std::string& output, const std
     std::cout << "{\"map\": " << jsonString(map_dir) << ", \"output\": " << jsonString(output)
               << ", \"mesh\": " << jsonString(mode) << ", \"scans\": " << r.scans
               << ", \"voxel_m\": " << jsonNumber(config.voxel_m) << ", \"slabs\": " << r.slabs
-              << ", \"voxels\": " << r.voxels << ", \"memory_bytes\": " << r.memory_bytes
-              << ", \"integrate_seconds\": " << jsonNumber(r.integrate_s)
+              << ", \"scans_read\": " << r.scans_read << ", \"voxels\": " << r.voxels
+              << ", \"memory_bytes\": " << r.memory_bytes << ", \"integrate_seconds\": " << jsonNumber(r.integrate_s)
               << ", \"mesh_seconds\": " << jsonNumber(r.mesh_s) << ", \"surface_points\": " << r.surface_points
               << ", \"decimated_from\": " << decimated.faces_before << ", \"triangles\": " << t.faces
               << ", \"vertices\": " << t.vertices << ", \"boundary_edges\": " << t.boundary_edges
@@ -93,7 +93,8 @@ int meshInSlabs(const std::string& map_dir, const std::string& output, const std
               << " slabs along x (the whole map's grids would pass --max-grid-mb = " << config.max_grid_mb
               << " MB): " << r.voxels << " voxels, the largest slab " << r.memory_bytes / 1048576.0 << " MB; voxel "
               << config.voxel_m << " m\n"
-              << "integration:  " << r.integrate_s << " s\n"
+              << "integration:  " << r.integrate_s << " s (" << r.scans_read
+              << " scans read over the slabs: each reads those that reach it)\n"
               << "mesh:         " << mode << ", " << t.faces << " triangles, " << t.vertices << " vertices, "
               << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges << " non-manifold edges\n";
     if (decimated.collapses > 0)

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -188,7 +189,8 @@ class FusedMap {
 
  private:
   size_t integrateSigned(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin, bool remove);
-  friend size_t integrateMapDirectory(FusedMap&, const std::string&, std::vector<std::string>*);
+  friend size_t integrateMapDirectory(FusedMap&, const std::string&, std::vector<std::string>*,
+                                      const std::vector<uint8_t>*);
   struct Grids;
   /// Share of max_grid_mb this map may use (one thread's of integrateMapDirectory).
   double bound_share_ = 1.0;
@@ -202,8 +204,13 @@ class FusedMap {
 /// IoError naming the file for a missing poses.csv, any problem of the directory, an unreadable scan
 /// or a map without scans; with `skipped` given, problems and unreadable scans are appended there
 /// instead (naming the file) and the good scans are integrated (IoError still when none is left).
+/// With `only` (one flag per scan of the directory, in its order), the scans whose flag is 0 are not
+/// read (0 returned when none is chosen); each thread still takes its run of all the scans, so a voxel
+/// gets the same updates in the same order as long as the scans that reach it are chosen (the slabs of
+/// meshFusedMapInSlabs). std::invalid_argument when `only` has another size.
 /// Returns the number of scans integrated.
-size_t integrateMapDirectory(FusedMap& map, const std::string& dir, std::vector<std::string>* skipped = nullptr);
+size_t integrateMapDirectory(FusedMap& map, const std::string& dir, std::vector<std::string>* skipped = nullptr,
+                             const std::vector<uint8_t>* only = nullptr);
 
 /// Runs work(t) for t in [0, threads) on as many threads (the caller's is the first); rethrows the
 /// first thread's exception (in thread order) after all are done.
@@ -220,6 +227,7 @@ struct FusedMesh {
   size_t voxels = 0;         ///< active voxels of the fused map (summed over slabs)
   size_t memory_bytes = 0;   ///< of its grids (the largest slab's)
   size_t slabs = 1;          ///< slabs along x it was built in (1: the whole map at once)
+  size_t scans_read = 0;     ///< scans integrated over all slabs (each slab reads the scans that reach it)
   double integrate_s = 0.0, mesh_s = 0.0;
 };
 /// The methods meshFusedMapDirectory takes: "marching_cubes" (FusedMap::extractMesh) and
@@ -239,7 +247,8 @@ FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& co
                                 const std::string& save_path = "", double min_slab_m = 1.0);
 /// meshFusedMapDirectory's slabs without its attempt at the whole map first (for a caller that saw
 /// the whole pass max_grid_mb): two halves along x of the map's readings, each built alone
-/// (FusedMapConfig::clip_x_*_voxel) and halved again while it passes the bound; same errors.
+/// (FusedMapConfig::clip_x_*_voxel) from the scans whose beams reach it (their x range, origin
+/// included, widened by the band and the splat) and halved again while it passes the bound; same errors.
 FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& config, const std::string& method,
                               const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr,
                               double min_slab_m = 1.0);
