@@ -400,15 +400,24 @@ std::string BpaMesherNode::vdbPath(const std::string& output) const {
                                            : output.substr(0, output.find_last_of('/') + 1) + "fused_map.vdb";
 }
 
-std::string BpaMesherNode::decimate(TriangleMesh& mesh) const {
-  if (config_.mesh_method != "marching_cubes" || config_.mesh_decimate_error_m <= 0.0) return "";
+std::optional<DecimateConfig> BpaMesherNode::decimateConfig() const {
+  if (config_.mesh_method != "marching_cubes" || config_.mesh_decimate_error_m <= 0.0) return std::nullopt;
   DecimateConfig dc;
   dc.max_error_m = config_.mesh_decimate_error_m;
-  const DecimateStats d = decimateMesh(mesh, dc);
+  return dc;
+}
+
+std::string BpaMesherNode::decimatedText(const DecimateStats& d, const std::string& how) const {
   std::ostringstream out;
-  out << "; decimated from " << d.faces_before << " within " << dc.max_error_m * 1000.0 << " mm in " << d.seconds
-      << " s";
+  out << "; decimated" << how << " from " << d.faces_before << " within " << config_.mesh_decimate_error_m * 1000.0
+      << " mm in " << d.seconds << " s";
   return out.str();
+}
+
+std::string BpaMesherNode::decimate(TriangleMesh& mesh) const {
+  const std::optional<DecimateConfig> dc = decimateConfig();
+  if (!dc) return "";
+  return decimatedText(decimateMesh(mesh, *dc), "");
 }
 
 void BpaMesherNode::publishFusedSurface(const std::vector<Eigen::Vector3f>& points) {
@@ -425,6 +434,7 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
   FusedMapConfig fc = fusedConfig(config_.fused_voxel_m);
   std::vector<std::string> skipped;
   const std::string vdb = vdbPath(output);
+  const std::optional<DecimateConfig> decimate_config = decimateConfig();  // slabs: each decimated alone
   // A map too large for the grids at fused_voxel_m is built in slabs along x (meshFusedMapDirectory);
   // one whose 1 m slabs do not fit either is fused with coarser voxels (the grids' memory falls with
   // about the square of the voxel: a band of voxels around every surface), up to 4 times
@@ -435,7 +445,8 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
     fc.truncation_m = 3.0 * voxel;
     skipped.clear();
     try {
-      r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped, vdb);
+      r = meshFusedMapDirectory(config_.map_dir, fc, config_.mesh_method, mc, &skipped, vdb, 1.0,
+                                decimate_config ? &*decimate_config : nullptr);
       break;
     } catch (const GridBoundError& e) {
       if (voxel * 1.5 > 4.0 * config_.fused_voxel_m + 1e-9) throw;
@@ -465,7 +476,8 @@ void BpaMesherNode::buildFusedAndPublish(const MesherConfig& mc, const std::stri
     ROS_ERROR("bpa_mesher_node: the fused map was not saved: %s", r.save_problem.c_str());
     skipped.push_back("the fused map was not saved: " + r.save_problem);
   }
-  const std::string decimated = decimate(r.mesh);
+  const std::string decimated =
+      r.decimated.faces_before > 0 ? decimatedText(r.decimated, " slab by slab") : decimate(r.mesh);
   publishFusedSurface(r.surface);
   std::ostringstream msg;
   msg << r.mesh.faces.size() << " triangles by " << config_.mesh_method << " of the fused map of " << r.scans

@@ -392,7 +392,8 @@ namespace {
 /// The two halves of a large mesh decimated at once on two threads: faces split at the median x
 /// of their centroids, the vertices both halves use pinned in both (the seam stays as it was, so
 /// the halves meet exactly), then joined.
-DecimateStats decimateInHalves(TriangleMesh& mesh, const DecimateConfig& config) {
+DecimateStats decimateInHalves(TriangleMesh& mesh, const DecimateConfig& config,
+                               const std::vector<char>& pinned_by_caller) {
   const auto t0 = std::chrono::steady_clock::now();
   const size_t nv = mesh.vertices.size(), nf = mesh.faces.size();
   for (size_t f = 0; f < nf; ++f)
@@ -425,7 +426,7 @@ DecimateStats decimateInHalves(TriangleMesh& mesh, const DecimateConfig& config)
       from_half[h].push_back(static_cast<int>(i));
       half[h].vertices.push_back(mesh.vertices[i]);
       if (!mesh.normals.empty()) half[h].normals.push_back(mesh.normals[i]);
-      pinned[h].push_back(used[i] == 3);
+      pinned[h].push_back(used[i] == 3 || (i < pinned_by_caller.size() && pinned_by_caller[i]));
     }
     for (size_t f = 0; f < nf; ++f)
       if (side[f] == h) {
@@ -478,7 +479,7 @@ DecimateStats decimateInHalves(TriangleMesh& mesh, const DecimateConfig& config)
 
 }  // namespace
 
-DecimateStats decimateMesh(TriangleMesh& mesh, const DecimateConfig& config) {
+DecimateStats decimateMesh(TriangleMesh& mesh, const DecimateConfig& config, const std::vector<char>& pinned) {
   config.validate();
   if (config.max_error_m <= 0.0 || mesh.faces.empty()) {
     DecimateStats none;
@@ -487,8 +488,8 @@ DecimateStats decimateMesh(TriangleMesh& mesh, const DecimateConfig& config) {
     return none;
   }
   if (config.max_faces == 0 && config.threads >= 2 && mesh.faces.size() >= kMinFacesToSplit)
-    return decimateInHalves(mesh, config);
-  return Decimator(mesh, config).run();
+    return decimateInHalves(mesh, config, pinned);
+  return Decimator(mesh, config, pinned).run();
 }
 
 }  // namespace mesher

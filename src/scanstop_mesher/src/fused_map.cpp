@@ -819,7 +819,8 @@ XExtents mapXExtents(const std::string& dir) {
 }  // namespace
 
 FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& config, const std::string& method,
-                              const MesherConfig& bpa, std::vector<std::string>* skipped, double min_slab_m) {
+                              const MesherConfig& bpa, std::vector<std::string>* skipped, double min_slab_m,
+                              const DecimateConfig* decimate_slabs) {
   if (!isFusedMeshMethod(method))
     throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
   const double vs = config.voxel_m;
@@ -880,7 +881,28 @@ FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& conf
       surface.normals.insert(surface.normals.end(), part.normals.begin(), part.normals.end());
     }
     if (method == "marching_cubes") {
-      const TriangleMesh m = fused.extractSlabMesh(a, b);
+      TriangleMesh m = fused.extractSlabMesh(a, b);
+      if (decimate_slabs && decimate_slabs->max_error_m > 0.0) {
+        fused = FusedMap(slab);  // the grids are done with: not held while decimating
+        // The vertices within a cell of a border stay: the vertices the neighbour shares keep their
+        // neighbours among themselves, so no collapse joins two of them by an edge the neighbour has too.
+        std::vector<char> pinned(m.vertices.size());
+        for (size_t i = 0; i < m.vertices.size(); ++i) {
+          const int cell = static_cast<int>(std::floor(m.vertices[i].x() / vs));
+          pinned[i] = cell <= a || cell >= b - 1;
+        }
+        const DecimateStats d = decimateMesh(m, *decimate_slabs, pinned);
+        DecimateStats& sum = out.decimated;
+        sum.faces_before += d.faces_before;
+        sum.faces_after += d.faces_after;
+        sum.vertices_before += d.vertices_before;
+        sum.vertices_after += d.vertices_after;
+        sum.collapses += d.collapses;
+        sum.refused += d.refused;
+        sum.locked_vertices += d.locked_vertices;
+        sum.max_error_m = std::max(sum.max_error_m, d.max_error_m);
+        sum.seconds += d.seconds;
+      }
       std::vector<int> index(m.vertices.size());
       for (size_t i = 0; i < m.vertices.size(); ++i) {
         const int cell = static_cast<int>(std::floor(m.vertices[i].x() / vs));
@@ -923,7 +945,7 @@ FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& conf
 
 FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
                                 const MesherConfig& bpa, std::vector<std::string>* skipped,
-                                const std::string& save_path, double min_slab_m) {
+                                const std::string& save_path, double min_slab_m, const DecimateConfig* decimate_slabs) {
   if (!isFusedMeshMethod(method))
     throw std::invalid_argument("mesh method '" + method + "' is not one of marching_cubes, fused_bpa");
   FusedMesh out;
@@ -955,7 +977,7 @@ FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& co
     // Too large as a whole: in slabs (the scans' problems are named again by the slabs' pass).
     if (skipped) skipped->resize(skipped_before);
     malloc_trim(0);  // the whole map's grids are gone: the slabs' grids start from a trimmed heap
-    out = meshFusedMapInSlabs(dir, config, method, bpa, skipped, min_slab_m);
+    out = meshFusedMapInSlabs(dir, config, method, bpa, skipped, min_slab_m, decimate_slabs);
   }
   if (out.mesh.faces.empty())
     throw std::runtime_error("nothing to mesh: the fused map of " + dir + " holds no observed surface");

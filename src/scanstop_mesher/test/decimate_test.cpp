@@ -113,6 +113,28 @@ TEST(Decimate, FlatPatchShrinksToAFewTrianglesAndKeepsItsOutline) {
   for (const auto& n : m.normals) EXPECT_GT(n.z(), 0.99f);
 }
 
+// Vertices the caller pins stay, on one thread and in the two halves: a band across a flat patch (a
+// slab's border band in meshFusedMapInSlabs) keeps all its vertices, the rest of the patch still goes.
+TEST(Decimate, PinnedVerticesStay) {
+  for (int n : {60, 240}) {  // 7,200 faces (one thread) and 115,200 (two halves)
+    TriangleMesh m = gridPatch(n, 3.0);
+    std::vector<char> pinned(m.vertices.size(), 0);
+    std::vector<Eigen::Vector3f> band;
+    for (size_t i = 0; i < m.vertices.size(); ++i)
+      if (std::fabs(m.vertices[i].x() - 1.0f) < 0.01f) {  // the column at x = 1 m
+        pinned[i] = 1;
+        band.push_back(m.vertices[i]);
+      }
+    ASSERT_EQ(band.size(), static_cast<size_t>(n + 1));
+    const size_t before = m.faces.size();
+    decimateMesh(m, DecimateConfig(), pinned);
+    EXPECT_LT(m.faces.size(), before / 10) << n;
+    for (const Eigen::Vector3f& v : band)
+      EXPECT_NE(std::find(m.vertices.begin(), m.vertices.end(), v), m.vertices.end()) << n << ": " << v.transpose();
+    EXPECT_TRUE(analyzeTopology(m).manifold()) << n;
+  }
+}
+
 TEST(Decimate, NoiseWithinTheBoundIsSmoothedAwayNoiseAboveItIsKept) {
   // 0.3 mm of noise on a flat patch: a 1 mm bound removes most of it; a 0.1 mm bound keeps most.
   TriangleMesh fine = gridPatch(40, 2.0, 0.0003), strict = fine;

@@ -119,7 +119,10 @@ TEST(FuseMapCli, AMapTooLargeForTheBoundIsMeshedInSlabs) {
   EXPECT_GT(jsonValue(r.out, "slabs"), 1) << r.out;
   EXPECT_LE(jsonValue(r.out, "memory_bytes"), 20.0 * 1048576) << r.out;
   EXPECT_EQ(static_cast<double>(readMesh(tmp.path + "/slabs.ply").faces.size()), jsonValue(r.out, "triangles"));
-  EXPECT_NEAR(jsonValue(r.out, "decimated_from"), jsonValue(whole.out, "decimated_from"), 2) << "the whole map's mesh";
+  // Each slab's mesh decimated alone: from the whole map's faces (counted before the pinched fans at the
+  // rim are dropped over the welded mesh).
+  EXPECT_GE(jsonValue(r.out, "decimated_from"), jsonValue(whole.out, "decimated_from")) << r.out;
+  EXPECT_LE(jsonValue(r.out, "decimated_from"), 1.01 * jsonValue(whole.out, "decimated_from")) << r.out;
   EXPECT_EQ(jsonValue(r.out, "nonmanifold_edges"), 0);
   r = run(tmp.path + "/map " + tmp.path + "/points.ply --mesh points --carve 0.2 --max-grid-mb 20");
   EXPECT_EQ(r.status, 1);

@@ -522,6 +522,23 @@ TEST(FusedMap, ASlabReadsOnlyTheScansThatReachIt) {
   EXPECT_GE(common.size(), a.size() - a.size() / 10000);
   EXPECT_NEAR(static_cast<double>(slabs.mesh.faces.size()), static_cast<double>(whole.mesh.faces.size()),
               1e-4 * whole.mesh.faces.size());
+  // Each slab decimated before the next: the slabs still meet (their cuts are boundary, which the
+  // decimation keeps), so the result has about the boundary of the whole mesh decimated at once; an open
+  // seam would add about a thousand boundary edges per slab border (a 2 cm cut through the room's walls,
+  // floor and ceiling).
+  DecimateConfig dc;
+  dc.max_error_m = 0.002;
+  const FusedMesh decimated = meshFusedMapInSlabs(dir, config, "marching_cubes", MesherConfig(), nullptr, 0.2, &dc);
+  EXPECT_GE(decimated.decimated.faces_before, slabs.mesh.faces.size());  // before the pinched fans dropped
+  EXPECT_LT(decimated.mesh.faces.size(), slabs.mesh.faces.size() / 2);
+  TriangleMesh at_once = slabs.mesh;
+  decimateMesh(at_once, dc);
+  const MeshTopology t = analyzeTopology(decimated.mesh), t1 = analyzeTopology(at_once);
+  EXPECT_NEAR(static_cast<double>(t.boundary_edges), static_cast<double>(t1.boundary_edges), 500.0);
+  EXPECT_EQ(t.nonmanifold_edges, 0u);
+  // More faces than at once: the cuts stay as they were (here 1.48 times, in slabs of 1-2 m).
+  EXPECT_GT(decimated.mesh.faces.size(), at_once.faces.size());
+  EXPECT_LT(decimated.mesh.faces.size(), 1.6 * at_once.faces.size());
   // integrateMapDirectory with a choice of scans: only those are read; none chosen reads nothing.
   config.max_grid_mb = 500.0;
   FusedMap none(config);

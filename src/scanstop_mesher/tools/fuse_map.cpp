@@ -69,10 +69,11 @@ int meshInSlabs(const std::string& map_dir, const std::string& output, const std
                 const FusedMapConfig& config, const MesherConfig& bpa_config, const DecimateConfig& decimate,
                 bool skip_bad, bool json) {
   std::vector<std::string> skipped;
+  // Each slab's mesh decimated before the next is built: the memory of a slab, not of the whole mesh.
   FusedMesh r = meshFusedMapInSlabs(map_dir, config, mode == "bpa" ? "fused_bpa" : "marching_cubes", bpa_config,
-                                    skip_bad ? &skipped : nullptr);
+                                    skip_bad ? &skipped : nullptr, 1.0, &decimate);
   for (const std::string& w : skipped) std::cerr << "fuse_map: warning: skipped: " << w << "\n";
-  const DecimateStats decimated = mode == "marching_cubes" ? decimateMesh(r.mesh, decimate) : DecimateStats();
+  const DecimateStats& decimated = r.decimated;
   writeMesh(output, r.mesh);
   const MeshTopology t = analyzeTopology(r.mesh);
   if (json) {
@@ -98,9 +99,9 @@ int meshInSlabs(const std::string& map_dir, const std::string& output, const std
               << "mesh:         " << mode << ", " << t.faces << " triangles, " << t.vertices << " vertices, "
               << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges << " non-manifold edges\n";
     if (decimated.collapses > 0)
-      std::cout << "decimated:    from " << decimated.faces_before << " triangles within " << decimate.max_error_m
-                << " m in " << decimated.seconds << " s\n";
-    std::cout << "meshing:      " << r.mesh_s << " s\n"
+      std::cout << "decimated:    slab by slab, from " << decimated.faces_before << " triangles within "
+                << decimate.max_error_m << " m in " << decimated.seconds << " s\n";
+    std::cout << "meshing:      " << r.mesh_s << " s (with the decimation)\n"
               << "written:      " << output << std::endl;
   }
   return 0;

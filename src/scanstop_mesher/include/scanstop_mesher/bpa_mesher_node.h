@@ -13,6 +13,7 @@
 #include <atomic>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -108,6 +109,10 @@ class BpaMesherNode {
   /// Decimates a Marching Cubes mesh by mesh_decimate_error_m; returns "; decimated from ..." for the
   /// message ("" when not).
   std::string decimate(TriangleMesh& mesh) const;
+  /// The decimation's settings (none: not Marching Cubes, or mesh_decimate_error_m 0).
+  std::optional<DecimateConfig> decimateConfig() const;
+  /// "; decimated<how> from N within E mm in S s".
+  std::string decimatedText(const DecimateStats& d, const std::string& how) const;
   /// The fused map's surface points on mesher/fused_cloud, cut at display_max_z_m.
   void publishFusedSurface(const std::vector<Eigen::Vector3f>& points);
   /// build_mesh from the tracker's map; false when there is no tracker (build_mesh integrates anew).

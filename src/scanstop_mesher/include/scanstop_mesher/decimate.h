@@ -14,6 +14,7 @@
 /// outline exactly. A mesh that is not manifold at an edge keeps that edge's vertices as well.
 
 #include <cstddef>
+#include <vector>
 
 #include "scanstop_common/cloud.h"
 
@@ -55,7 +56,9 @@ struct DecimateStats {
 /// Decimates the mesh in place (vertices, faces; normals recomputed from the faces, area-weighted,
 /// when the mesh had normals). Faces keep their winding. Deterministic. Throws ConfigError for bad
 /// settings, std::invalid_argument for a face with an index out of range.
-DecimateStats decimateMesh(TriangleMesh& mesh, const DecimateConfig& config);
+/// `pinned` (by vertex index, may be shorter than the vertices or empty): vertices that stay where they
+/// are as well (a slab's border band, so that the slabs still meet exactly).
+DecimateStats decimateMesh(TriangleMesh& mesh, const DecimateConfig& config, const std::vector<char>& pinned = {});
 
 }  // namespace mesher
 }  // namespace scanstop

@@ -26,6 +26,7 @@
 
 #include "scanstop_common/cloud.h"
 #include "scanstop_common/error.h"
+#include "scanstop_mesher/decimate.h"
 #include "scanstop_mesher/mesher.h"
 
 namespace scanstop {
@@ -228,6 +229,7 @@ struct FusedMesh {
   size_t memory_bytes = 0;   ///< of its grids (the largest slab's)
   size_t slabs = 1;          ///< slabs along x it was built in (1: the whole map at once)
   size_t scans_read = 0;     ///< scans integrated over all slabs (each slab reads the scans that reach it)
+  DecimateStats decimated;   ///< slabs decimated one by one (decimate_slabs): summed over them; else empty
   double integrate_s = 0.0, mesh_s = 0.0;
 };
 /// The methods meshFusedMapDirectory takes: "marching_cubes" (FusedMap::extractMesh) and
@@ -239,19 +241,24 @@ bool isFusedMeshMethod(const std::string& method);
 /// stands). A map whose grids would pass config.max_grid_mb is built and meshed in slabs along x
 /// instead (halved until each fits, down to min_slab_m; the slabs' meshes meet exactly and are
 /// welded, then pinched fans dropped over the whole): the same mesh within float rounding, memory
-/// bounded by one slab; no .vdb then (slabs > 1 says so). Throws GridBoundError when a
+/// bounded by one slab; no .vdb then (slabs > 1 says so); decimate_slabs as meshFusedMapInSlabs
+/// (the whole map's mesh is left to the caller: decimated.faces_before 0). Throws GridBoundError when a
 /// min_slab_m slab does not fit, std::invalid_argument for another method and std::runtime_error
 /// when the fused map holds no observed surface.
 FusedMesh meshFusedMapDirectory(const std::string& dir, const FusedMapConfig& config, const std::string& method,
                                 const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr,
-                                const std::string& save_path = "", double min_slab_m = 1.0);
+                                const std::string& save_path = "", double min_slab_m = 1.0,
+                                const DecimateConfig* decimate_slabs = nullptr);
 /// meshFusedMapDirectory's slabs without its attempt at the whole map first (for a caller that saw
 /// the whole pass max_grid_mb): two halves along x of the map's readings, each built alone
 /// (FusedMapConfig::clip_x_*_voxel) from the scans whose beams reach it (their x range, origin
 /// included, widened by the band and the splat) and halved again while it passes the bound; same errors.
+/// With decimate_slabs (Marching Cubes), each slab's mesh is decimated before the next is built (its
+/// cut at the slab's borders is boundary, which decimation keeps, so the slabs still meet exactly): the
+/// memory stays that of a slab, not of the whole undecimated mesh; the caller does not decimate again.
 FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& config, const std::string& method,
                               const MesherConfig& bpa, std::vector<std::string>* skipped = nullptr,
-                              double min_slab_m = 1.0);
+                              double min_slab_m = 1.0, const DecimateConfig* decimate_slabs = nullptr);
 
 }  // namespace mesher
 }  // namespace scanstop
