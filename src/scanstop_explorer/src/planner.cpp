@@ -90,6 +90,9 @@ void PlannerConfig::validate() const {
   requireInRange("gain_sample_m", gain_sample_m, 1e-6, 5.0, "m");
   requireInRange("max_gain_samples", max_gain_samples, 1, 1e6);
   requireInRange("min_gain_m2", min_gain_m2, 0.0, 1e6, "m^2");
+  if (gain_cells != "lacking" && gain_cells != "open")
+    throw ConfigError("gain_cells = '" + gain_cells + "' is not one of: lacking, open");
+  requireInRange("min_open_area_m2", min_open_area_m2, 0.0, 100.0, "m^2");
 }
 
 cv::Mat floorMask(const cv::Mat& states) { return (states == kFloor) / 255; }
@@ -657,8 +660,14 @@ namespace {
 void chooseByGain(PlanResult& res, const cv::Mat& candidates, const PlannerConfig& cfg) {
   const GridGeometry& g = res.geometry;
   const int sample = std::max(1, static_cast<int>(std::lround(cfg.gain_sample_m / g.resolution)));
-  res.gain = gainMap(res.states, g, res.knowledge, cfg.knowledge_threshold, candidates, cfg.k_r_m, sample,
-                     cfg.max_gain_samples);
+  if (cfg.gain_cells == "open") {
+    const cv::Mat open = res.open != 0;
+    res.gain = gainMap(res.states, g, (res.states == kUnknown) | open, open, candidates, cfg.k_r_m, sample,
+                       cfg.max_gain_samples);
+  } else {
+    res.gain = gainMap(res.states, g, res.knowledge, cfg.knowledge_threshold, candidates, cfg.k_r_m, sample,
+                       cfg.max_gain_samples);
+  }
   double best = 0.0;
   for (int r = 0; r < res.gain.rows; ++r)
     for (int c = 0; c < res.gain.cols; ++c) {
@@ -689,6 +698,19 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   res.open =
       openCells(res.states, res.cost_map.cost, res.knowledge, res.blacklist, cfg.knowledge_threshold,
                 cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge, frontier);
+  if (cfg.min_open_area_m2 > 0.0) {  // small pieces of open cells are not open
+    cv::Mat labels, stats, centroids;
+    const int n = cv::connectedComponentsWithStats(res.open, labels, stats, centroids, 8, CV_32S);
+    const double min_cells = cfg.min_open_area_m2 / g.cellArea();
+    for (int r = 0; r < labels.rows; ++r)
+      for (int c = 0; c < labels.cols; ++c) {
+        const int l = labels.at<int>(r, c);
+        if (l > 0 && l < n && stats.at<int>(l, cv::CC_STAT_AREA) < min_cells) {
+          res.open.at<uint8_t>(r, c) = 0;
+          ++res.open_cells_ignored;
+        }
+      }
+  }
   timer.lap("evaluation_and_termination");
   res.open_cells = static_cast<size_t>(cv::countNonZero(res.open));
   const cv::Mat reached = res.cost_map.predecessor >= 0;
@@ -713,7 +735,12 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
              : " (below occluded_frontier_knowledge = " + fmt(cfg.occluded_frontier_knowledge) +
                    " next to a frontier no scan has in sight)") +
         " (" + std::to_string(n_reached) + " reachable cells, " + std::to_string(n_black) +
-        " blacklisted as unreachable)";
+        " blacklisted as unreachable" +
+        (res.open_cells_ignored > 0
+             ? ", " + std::to_string(res.open_cells_ignored) +
+                   " open cells in pieces under min_open_area_m2 = " + fmt(cfg.min_open_area_m2, 3) + " m^2 ignored"
+             : std::string()) +
+        ")";
     res.message = "exploration complete";
     if (!in.goal) return;
   }
@@ -738,7 +765,8 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     }
   } else {
     const cv::Mat candidates = (res.knowledge < cfg.knowledge_threshold) | (res.open != 0);
-    if (cfg.target_score == "gain") chooseByGain(res, candidates & reached & (res.blacklist == 0), cfg);
+    if (cfg.target_score == "gain")
+      chooseByGain(res, (cfg.gain_cells == "open" ? reached : candidates & reached) & (res.blacklist == 0), cfg);
     if (res.target_cell.x < 0) res.target_cell = argmaxCell(res.evaluation, candidates);
     timer.lap(cfg.target_score == "gain" ? "target_by_gain" : "target");
   }

@@ -34,6 +34,15 @@ cv::Mat visibilityKnowledgeMap(const cv::Mat& states, const GridGeometry& g, con
 
 cv::Mat gainMap(const cv::Mat& states, const GridGeometry& g, const cv::Mat& knowledge, double knowledge_threshold,
                 const cv::Mat& candidates, double range_m, int sample_cells, int max_samples, cv::Mat* sampled) {
+  if (states.empty())
+    return gainMap(states, g, cv::Mat(), cv::Mat(), candidates, range_m, sample_cells, max_samples, sampled);
+  // The cells a scan would add something on: unknown, or not an obstacle and below the threshold.
+  const cv::Mat worth = (states == kUnknown) | ((states != kObstacle) & (knowledge < knowledge_threshold));
+  return gainMap(states, g, worth, cv::Mat(), candidates, range_m, sample_cells, max_samples, sampled);
+}
+
+cv::Mat gainMap(const cv::Mat& states, const GridGeometry& g, const cv::Mat& given_worth, const cv::Mat& required,
+                const cv::Mat& candidates, double range_m, int sample_cells, int max_samples, cv::Mat* sampled) {
   cv::Mat gain = cv::Mat::zeros(g.height, g.width, CV_32F);
   cv::Mat lattice = cv::Mat::zeros(g.height, g.width, CV_8U);
   if (!states.empty() && cv::countNonZero(candidates) > 0) {
@@ -45,16 +54,19 @@ cv::Mat gainMap(const cv::Mat& states, const GridGeometry& g, const cv::Mat& kno
       return n;
     };
     while (samples(step) > std::max(1, max_samples)) ++step;
-    // The cells a scan would add something on: unknown, or not an obstacle and below the threshold.
-    cv::Mat worth = (states == kUnknown) | ((states != kObstacle) & (knowledge < knowledge_threshold));
+    const cv::Mat worth = given_worth & (states != kObstacle);
     RayCaster caster(states, g, range_m, 1.0);  // a gain estimate: rays one cell apart at the range's end
     for (int r = 0; r < candidates.rows; r += step)
       for (int c = 0; c < candidates.cols; c += step) {
         if (!candidates.at<uint8_t>(r, c)) continue;
         lattice.at<uint8_t>(r, c) = 1;
         int n = 0;
-        caster.cast(g.center({c, r}), [&](const cv::Point& p) { n += worth.at<uint8_t>(p) != 0; });
-        gain.at<float>(r, c) = static_cast<float>(n * g.cellArea());
+        bool sees_required = required.empty();
+        caster.cast(g.center({c, r}), [&](const cv::Point& p) {
+          n += worth.at<uint8_t>(p) != 0;
+          sees_required = sees_required || required.at<uint8_t>(p) != 0;
+        });
+        gain.at<float>(r, c) = sees_required ? static_cast<float>(n * g.cellArea()) : 0.0f;
       }
   }
   if (sampled) *sampled = lattice;

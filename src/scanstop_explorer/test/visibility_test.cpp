@@ -175,4 +175,100 @@ TEST(PlannerConfig, NamesABadKnowledgeModelOrTargetScore) {
   c = PlannerConfig();
   c.gain_sample_m = 0.0;
   EXPECT_THROW(c.validate(), scanstop::ConfigError);
+  c = PlannerConfig();
+  c.gain_cells = "all";
+  EXPECT_THROW(c.validate(), scanstop::ConfigError);
+  c = PlannerConfig();
+  c.min_open_area_m2 = -0.1;
+  EXPECT_THROW(c.validate(), scanstop::ConfigError);
+}
+
+TEST(GainMap, WithRequiredCellsACandidateThatSeesNoneGainsNothing) {
+  // Two 4 x 4 m rooms, the door between them; the second room's floor unknown. Counting the unknown
+  // cells, a spot in room 1 that sees through the door gains; when a required cell must be in sight,
+  // it gains only if that cell (in room 1 near it, or behind the wall out of sight) is.
+  const test::Scene s = test::twoRooms();
+  cv::Mat states = test::idealStates(s);
+  for (int r = 0; r < states.rows; ++r)
+    for (int c = 0; c < states.cols; ++c)
+      if (states.at<uint8_t>(r, c) == kFloor && s.geometry.center({c, r}).x() > 4.3)
+        states.at<uint8_t>(r, c) = kUnknown;
+  cv::Mat candidates = cv::Mat::zeros(states.size(), CV_8U);
+  candidates.at<uint8_t>(s.geometry.cellOf(3.0, 2.0)) = 1;
+  const cv::Mat worth = states == kUnknown;
+  const float free_gain =
+      at(gainMap(states, s.geometry, worth, cv::Mat(), candidates, 3.0, 1, 100), s.geometry, 3.0, 2.0);
+  EXPECT_GT(free_gain, 1.0f);
+  cv::Mat required = cv::Mat::zeros(states.size(), CV_8U);
+  required.at<uint8_t>(s.geometry.cellOf(4.8, 0.3)) = 1;  // in room 2, hidden by the wall
+  EXPECT_FLOAT_EQ(at(gainMap(states, s.geometry, worth, required, candidates, 3.0, 1, 100), s.geometry, 3.0, 2.0),
+                  0.0f);
+  required.at<uint8_t>(s.geometry.cellOf(2.5, 2.0)) = 1;  // in plain sight
+  EXPECT_FLOAT_EQ(at(gainMap(states, s.geometry, worth, required, candidates, 3.0, 1, 100), s.geometry, 3.0, 2.0),
+                  free_gain);
+}
+
+TEST(OpenPieces, APieceSmallerThanMinOpenAreaDoesNotKeepExplorationGoing) {
+  // The 6 x 1.2 m corridor, its floor beyond x = 5 m not seen, one scan at its start: the reached
+  // cells near that frontier beyond the scan's knowledge radius are open, one piece.
+  const test::Scene s = test::corridor();
+  cv::Mat states = test::idealStates(s);
+  for (int r = 0; r < states.rows; ++r)
+    for (int c = 0; c < states.cols; ++c)
+      if (s.geometry.center({c, r}).x() > 5.0) states.at<uint8_t>(r, c) = kUnknown;
+  const std::vector<Eigen::Vector2d> scans{{0.8, 0.6}};
+  PlannerConfig cfg;
+  cfg.knowledge_model = "visibility";
+  cfg.k_r_m = 2.5;
+  const PlanResult all = planStep(inputFor(s, states, scans, scans.back()), cfg);
+  ASSERT_TRUE(all.success) << all.message;
+  ASSERT_FALSE(all.complete);
+  const size_t piece = all.open_cells;
+  ASSERT_GT(piece, 20u);
+  EXPECT_EQ(all.open_cells_ignored, 0u);
+  // A bound just above the piece's area: nothing is open, exploration is complete and says why.
+  cfg.min_open_area_m2 = (piece + 0.5) * s.geometry.cellArea();
+  const PlanResult small = planStep(inputFor(s, states, scans, scans.back()), cfg);
+  ASSERT_TRUE(small.success) << small.message;
+  EXPECT_TRUE(small.complete);
+  EXPECT_EQ(small.open_cells, 0u);
+  EXPECT_EQ(small.open_cells_ignored, piece);
+  EXPECT_NE(small.complete_reason.find(std::to_string(piece) + " open cells in pieces under min_open_area_m2"),
+            std::string::npos)
+      << small.complete_reason;
+  // A bound just below it keeps the piece, and the plan goes there.
+  cfg.min_open_area_m2 = (piece - 0.5) * s.geometry.cellArea();
+  const PlanResult kept = planStep(inputFor(s, states, scans, scans.back()), cfg);
+  EXPECT_FALSE(kept.complete);
+  EXPECT_EQ(kept.open_cells, piece);
+  EXPECT_GT(kept.target.x(), 3.0);
+}
+
+TEST(GainChoice, CountingOpenCellsAScanSpotThatSeesNoneGainsNothing) {
+  // Room 1 of the two rooms scanned from its four quarters (it is known and has knowledge), room 2
+  // seen only through the door. gain_cells "open": a spot in room 1's far corner sees no open cell
+  // within k_r (the door lies 3.5 m away) and gains nothing, though unknown cells of room 2 may lie
+  // in its sight; the target lies at the door or beyond it.
+  const test::Scene s = test::twoRooms();
+  const std::vector<Eigen::Vector2d> scans{{1.0, 1.0}, {3.0, 1.0}, {1.0, 3.0}, {3.0, 3.0}};
+  const cv::Mat states = test::seenStates(s, scans, 6.0);
+  PlannerConfig cfg;
+  cfg.knowledge_model = "visibility";
+  cfg.target_score = "gain";
+  cfg.gain_cells = "open";
+  cfg.k_r_m = 2.5;
+  cfg.gain_sample_m = 0.05;  // every cell a candidate
+  cfg.max_gain_samples = 1000000;
+  const PlanResult r = planStep(inputFor(s, states, scans, scans.back()), cfg);
+  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_FALSE(r.complete);
+  EXPECT_FLOAT_EQ(at(r.gain, s.geometry, 0.5, 0.5), 0.0f);
+  EXPECT_GT(r.target.x(), 3.5) << r.message;
+  EXPECT_GT(r.target_gain_m2, 1.0);
+  // "lacking" (room 1 has knowledge everywhere) picks the same side.
+  PlannerConfig lacking = cfg;
+  lacking.gain_cells = "lacking";
+  const PlanResult l = planStep(inputFor(s, states, scans, scans.back()), lacking);
+  ASSERT_TRUE(l.success) << l.message;
+  EXPECT_GT(l.target.x(), 3.5) << l.message;
 }

@@ -43,6 +43,8 @@ void forEachParameter(ExplorerConfig& c, Visit&& visit) {
   visit("gain_sample_m", c.planner.gain_sample_m);
   visit("max_gain_samples", c.planner.max_gain_samples);
   visit("min_gain_m2", c.planner.min_gain_m2);
+  visit("gain_cells", c.planner.gain_cells);
+  visit("min_open_area_m2", c.planner.min_open_area_m2);
   visit("known_free_radius_m", c.known_free_radius_m);
   visit("self_filter_radius_m", c.self_filter_radius_m);
   visit("target_tolerance_m", c.target_tolerance_m);

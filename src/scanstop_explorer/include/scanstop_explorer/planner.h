@@ -38,6 +38,12 @@ struct PlannerConfig {
   /// no frontier: pockets enclosed by known cells, such as a wall cell no point fell into, hide no
   /// floor the robot could use (0: every unknown cell next to floor is frontier) [m], [0, 50]
   double frontier_min_unknown_m = 0.6;
+  /// Open cells (termination and targets) in 8-connected pieces of less than this area are not
+  /// open: a piece of a few cells (one cell next to a small gap in a wall's floor band, a shadow's
+  /// tip) sent the robot back across room_10x8 for 6 scans that saw nothing new; the narrowest door
+  /// the robot passes (0.8 m: 0.2 m of accessible floor, 0.5 m deep) is 0.1 m^2. 0: every open
+  /// cell counts [m^2], [0, 100]
+  double min_open_area_m2 = 0.0;
   /// An unknown cell whose only floor neighbours lie beside an obstacle cell (8-neighbours) is no
   /// frontier: it sits in or behind a wall (a wall base's floor cell, a noisy wall's outer face),
   /// not at the edge of a view into unknown space. false: the plain definition.
@@ -64,6 +70,12 @@ struct PlannerConfig {
   double gain_sample_m = 0.25;  ///< lattice of the candidates whose gain is computed [m], (0, 5]
   int max_gain_samples = 3000;  ///< the lattice grows coarser until at most this many candidates remain, [1, 1e6]
   double min_gain_m2 = 0.5;     ///< a candidate that would add less is not chosen by gain [m^2], [0, 1e6]
+  /// target_score "gain": what a candidate's gain counts in its plain sight within k_r_m. "lacking":
+  /// unknown cells and floor cells that lack knowledge (every cell must be seen from within k_r_m).
+  /// "open": unknown cells and open cells (what keeps exploration from completing), every reached
+  /// cell a candidate, one that sees no open cell gains nothing (floor already seen from farther
+  /// than k_r_m draws no scan).
+  std::string gain_cells = "lacking";
 
   /// Throws ConfigError naming the parameter, its value and the allowed range.
   void validate() const;
@@ -229,7 +241,8 @@ struct PlanResult {
   bool complete = false;
   std::string complete_reason;
   size_t open_cells = 0;
-  double coverage = 0.0;  ///< reached cells with knowledge >= threshold / reached cells
+  size_t open_cells_ignored = 0;  ///< open cells in pieces smaller than min_open_area_m2
+  double coverage = 0.0;          ///< reached cells with knowledge >= threshold / reached cells
   double floor_area_m2 = 0.0;
   double accessible_area_m2 = 0.0;
   double reachable_area_m2 = 0.0;

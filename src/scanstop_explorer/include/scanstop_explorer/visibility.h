@@ -56,6 +56,12 @@ cv::Mat visibilityKnowledgeMap(const cv::Mat& states, const GridGeometry& geomet
 cv::Mat gainMap(const cv::Mat& states, const GridGeometry& geometry, const cv::Mat& knowledge,
                 double knowledge_threshold, const cv::Mat& candidates, double range_m, int sample_cells,
                 int max_samples, cv::Mat* sampled = nullptr);
+/// The same with the cells that count given (`worth`, CV_8U: a cell in sight adds its area when
+/// set and not an obstacle); with `required` (CV_8U, may be empty) a candidate that has none of
+/// its cells in sight gains nothing.
+cv::Mat gainMap(const cv::Mat& states, const GridGeometry& geometry, const cv::Mat& worth, const cv::Mat& required,
+                const cv::Mat& candidates, double range_m, int sample_cells, int max_samples,
+                cv::Mat* sampled = nullptr);
 
 // ---- implementation ------------------------------------------------------------------------
 
