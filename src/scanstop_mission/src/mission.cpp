@@ -60,6 +60,8 @@ void MissionConfig::validate() const {
   requireInRange("leg_check_turn_position_m_per_rad", leg_check_turn_position_m_per_rad, 0.0, 0.5, "m/rad");
   requireInRange("relocalize_min_travel_m", relocalize_min_travel_m, 0.0, 100.0, "m");
   requireInRange("relocalize_min_turn_rad", relocalize_min_turn_rad, 0.0, 2 * M_PI, "rad");
+  requireInRange("relocalize_as_target_m", relocalize_as_target_m, 0.0, 10.0, "m");
+  if (relocalize_planes != 0) requireOneOf("relocalize_planes", relocalize_planes, {50, 100, 200, 400});
   requireInRange("leg_sidestep_m", leg_sidestep_m, 0.0, 1.0, "m");
   requireInRange("retry_backoff_s", retry_backoff_s, 0.0, 60.0, "s");
   requireInRange("max_consecutive_failed_cycles", max_consecutive_failed_cycles, 1, 1000);
@@ -321,7 +323,8 @@ bool Mission::budgetReached() const {
   return config_.max_scans > 0 && static_cast<int>(state_.scans.size()) >= config_.max_scans;
 }
 
-bool Mission::scanAndRegister() {
+bool Mission::scanAndRegister(int planes) {
+  if (planes <= 0 || planes > config_.planes) planes = config_.planes;
   adoptScansRegisteredElsewhere();  // a registration a dead predecessor left running may have ended since
   // Scan (retried: a scan changes nothing in the world).
   ScanResult scan;
@@ -329,7 +332,7 @@ bool Mission::scanAndRegister() {
     backoff(attempt);
     if (!checkControl()) return false;
     setState(State::Scanning);
-    scan = robot_.takeScan(config_.planes);
+    scan = robot_.takeScan(planes);
     if (scan.success) break;
     event("scan failed (attempt " + std::to_string(attempt + 1) + "): " + scan.message, true);
   }
@@ -938,15 +941,33 @@ Mission::Next Mission::drivePath(const PlanResult& plan, size_t first, const Mis
     const std::optional<double> clearance =
         i < plan.clearance_m.size() ? std::optional<double>(plan.clearance_m[i]) : std::nullopt;
     Drive drive = driveTo(plan.waypoints[i], clearance);
+    bool stood_for_target = false;
     while (drive == Drive::Relocalize) {
       // Scan where the robot stopped (its pose is then known again), then on to the same waypoint.
       // (Each time after relocalize_min_travel_m of driving: the robot gets on.)
       travel = 0.0;
       setPath(plan, i, static_cast<int>(snapshot().scans.size()));
       save();
-      if (!scanAndRegister()) break;
+      const Pose2D at = snapshot().estimate();
+      const double short_m = (plan.waypoints[i] - Eigen::Vector2d(at.x, at.y)).norm();
+      // Near the target the scan stands for the target's (all its planes); elsewhere it only
+      // re-localizes (relocalize_planes).
+      const bool stands =
+          i + 1 == plan.waypoints.size() && !homeward(snapshot()) && short_m <= config_.relocalize_as_target_m;
+      if (!scanAndRegister(stands ? 0 : config_.relocalize_planes)) break;
+      if (stands) {
+        event("the re-localization scan " + fmt(short_m) + " m before the target (" + fmt(plan.waypoints[i].x()) +
+              ", " + fmt(plan.waypoints[i].y()) + ") stands for its scan (relocalize_as_target_m " +
+              fmt(config_.relocalize_as_target_m) + " m); replanning");
+        stood_for_target = true;
+        break;
+      }
       setPath(plan, i, -1);
       drive = driveTo(plan.waypoints[i], clearance);
+    }
+    if (stood_for_target) {
+      replan = true;
+      break;
     }
     if (drive == Drive::Relocalize) {  // the re-localization scan failed
       if (!checkControl()) return Next::aborted();
@@ -1010,7 +1031,7 @@ bool Mission::giveUpTarget(const PlanResult& plan, bool collision, Cycle& cycle)
             (moved ? "scanning here to re-localize, then replanning"
                    : "replanning without a new scan (" + deadReckoningText() + ")"),
         true);
-  return moved && !scanAndRegister() && !checkControl();
+  return moved && !scanAndRegister(config_.relocalize_planes) && !checkControl();
 }
 
 State Mission::endMission(const Cycle& cycle) {

@@ -128,6 +128,8 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   params.optional("reverse_legs", config_.reverse_legs);
   params.optional("relocalize_min_travel_m", config_.relocalize_min_travel_m);
   params.optional("relocalize_min_turn_rad", config_.relocalize_min_turn_rad);
+  params.optional("relocalize_as_target_m", config_.relocalize_as_target_m);
+  params.optional("relocalize_planes", config_.relocalize_planes);
   params.optional("leg_sidestep_m", config_.leg_sidestep_m);
   params.optional("retry_backoff_s", config_.retry_backoff_s);
   params.optional("max_consecutive_failed_cycles", config_.max_consecutive_failed_cycles);

@@ -66,6 +66,8 @@ class FakeSystem : public RobotSystem {
   bool always_fail_plan = false;
   bool insert_intermediate = false;     // add a mid-point landmark with scan_at = true
   std::optional<double> leg_clearance;  // every plan's clearance of every leg (PlanResult::clearance_m)
+  double visit_radius_m = 0.15;         // a target counts as seen once a scan was this close to it
+  std::vector<int> scan_planes;         // the planes each scan was asked for
   // SLAM
   std::vector<Pose2D> slam_poses;
   int lose_register_answers = 0;  // store the scan but report failure this many times
@@ -93,6 +95,7 @@ class FakeSystem : public RobotSystem {
   ScanResult takeScan(int planes) override {
     ScanResult r;
     ++scans_taken;
+    scan_planes.push_back(planes);
     if (on_scan) on_scan(scans_taken);
     if (!state_path.empty() && !slam_poses.empty()) {
       // Every registered scan must already be persisted before the next step starts.
@@ -195,7 +198,7 @@ class FakeSystem : public RobotSystem {
     visited.resize(targets.size(), false);
     const Eigen::Vector2d here(map_pose.x, map_pose.y);
     for (size_t i = 0; i < targets.size(); ++i) {
-      if ((targets[i] - here).norm() < 0.15) visited[i] = true;
+      if ((targets[i] - here).norm() < visit_radius_m) visited[i] = true;
       for (const auto& u : unreachable)
         if ((targets[i] - u).norm() < 1e-6) visited[i] = true;
     }
@@ -793,6 +796,52 @@ TEST(Mission, ANarrowLegOfTheMapAfterDrivingBlindIsDrivenAfterAScan) {
   EXPECT_GE(run(0.35), 1);
   EXPECT_EQ(run(1.0), 0);
   EXPECT_EQ(run(std::nullopt), 0);
+}
+
+TEST(Mission, AReLocalizationScanNearTheTargetStandsForItsScan) {
+  // The 6 m path of the test above, its leg's clearance 0.35 m: every 2 m on odometry alone the
+  // robot scans to re-localize, the last time right at the target, which it then scans again.
+  // Within relocalize_as_target_m of the target a re-localization scan stands for the target's:
+  // the mission replans instead of driving on and scanning again.
+  std::vector<int> planes;
+  const auto run = [&planes](double as_target_m, double visit_radius_m) {
+    TempDir dir;
+    FakeSystem sys;
+    sys.targets = {{6.0, 0.0}};
+    sys.leg_clearance = 0.35;
+    sys.visit_radius_m = visit_radius_m;
+    MissionConfig c = config(dir.path());
+    c.planes = 400;
+    c.relocalize_planes = 100;
+    c.relocalize_as_target_m = as_target_m;
+    Mission m(c, sys, quiet, quiet);
+    m.run();
+    const MissionState s = m.snapshot();
+    EXPECT_TRUE(s.complete);
+    EXPECT_TRUE(s.unreachable.empty());
+    EXPECT_EQ(sys.first_collision, -1);
+    planes = sys.scan_planes;
+    return s;
+  };
+  const MissionState off = run(0.0, 0.15);
+  ASSERT_EQ(off.scans.size(), 5u);  // start, re-localizations at 2, 4 and 6 m, the target's scan at 6 m
+  EXPECT_NEAR(off.scans[3].true_pose->x, 6.0, 0.15);
+  EXPECT_NEAR(off.scans[4].true_pose->x, 6.0, 0.15);
+  EXPECT_FALSE(logged(off, "stands for its scan"));
+  EXPECT_EQ(planes, (std::vector<int>{400, 100, 100, 100, 400}));  // re-localizations with relocalize_planes
+  // 1 m: the re-localizations 4 and 2 m before the target do not stand for it, the one at it does
+  // and has all the planes of a target's scan.
+  const MissionState near = run(1.0, 0.15);
+  ASSERT_EQ(near.scans.size(), 4u);
+  EXPECT_NEAR(near.scans.back().true_pose->x, 6.0, 0.15);
+  EXPECT_TRUE(logged(near, "stands for its scan (relocalize_as_target_m 1.00 m)"));
+  EXPECT_EQ(planes, (std::vector<int>{400, 100, 100, 400}));
+  // 4.5 m, and an explorer that counts a scan within 4.5 m as the target's: the mission ends after
+  // the first re-localization.
+  const MissionState far = run(4.5, 4.5);
+  ASSERT_EQ(far.scans.size(), 2u);
+  EXPECT_NEAR(far.scans.back().true_pose->x, 2.0, 0.15);
+  EXPECT_TRUE(logged(far, "m before the target (6.00, 0.00) stands for its scan (relocalize_as_target_m 4.50 m)"));
 }
 
 TEST(Mission, ANarrowLegOfTheMapRightAfterALargeTurnIsDrivenAfterAScan) {
@@ -1475,6 +1524,13 @@ TEST(Mission, BadConfigurationNamesTheParameter) {
   c.scan_error_bound_m = 0.0;
   EXPECT_THROW(c.validate(), ConfigError);
   c.scan_error_bound_m = 0.15;
+  EXPECT_NO_THROW(c.validate());
+  c.relocalize_planes = 75;
+  EXPECT_THROW(c.validate(), ConfigError);
+  c.relocalize_planes = 100;
+  c.relocalize_as_target_m = -1.0;
+  EXPECT_THROW(c.validate(), ConfigError);
+  c.relocalize_as_target_m = 1.5;
   EXPECT_NO_THROW(c.validate());
   c.run_dir.clear();
   EXPECT_THROW(c.validate(), ConfigError);

@@ -114,6 +114,15 @@ struct MissionConfig {
   /// got wrong: furnished_3 seed 4 drove back out of a 0.6 m niche after a 175 deg turn and passed
   /// 0.0 cm from a shelf). [rad], [0, 2 pi]; 2 pi: off
   double relocalize_min_turn_rad = M_PI / 2;
+  /// A re-localization scan on the last leg of an exploration path, at most this far from the
+  /// target, stands for the target's scan: the mission replans from there instead of driving on and
+  /// scanning again (room_10x8: 4 of 19 scans were such pairs, 0.8-1.4 m apart; what the target
+  /// would have seen the explorer asks for again if it still lacks). [m], [0, 10]; 0: off
+  double relocalize_as_target_m = 0.0;
+  /// Planes of a scan taken only to re-localize (the leg check's, and after a target is given up):
+  /// registration needs far fewer than the map (a 100-plane scan takes 10 s, not 40 s). 0: planes;
+  /// else 50, 100, 200 or 400 (at most planes).
+  int relocalize_planes = 0;
   /// A leg the check refuses before the robot moves (an obstruction within leg_check_margin_m of
   /// the body ahead, e.g. a door jamb the leg grazes from where the robot stopped): the robot first
   /// looks for a sidestep of at most this much (0.05 m steps, 16 directions) after which the whole
@@ -225,7 +234,8 @@ class Mission {
   bool atHome(const MissionState& s) const;           ///< the estimate within home_tolerance_m of it
   bool homeward(const MissionState& s) const;         ///< exploration complete and return_home on
 
-  bool scanAndRegister();
+  /// Scans with `planes` (0 or more than MissionConfig::planes: MissionConfig::planes) and registers.
+  bool scanAndRegister(int planes = 0);
   /// Adopts the scans SLAM holds beyond the last one the mission knows, up to index `upto`
   /// (exclusive; -1 = all): registered by a mission that died before it could save them, or
   /// still being registered when this mission restarted. Caller holds no lock.
