@@ -93,6 +93,8 @@ void PlannerConfig::validate() const {
   if (gain_cells != "lacking" && gain_cells != "open")
     throw ConfigError("gain_cells = '" + gain_cells + "' is not one of: lacking, open");
   requireInRange("min_open_area_m2", min_open_area_m2, 0.0, 100.0, "m^2");
+  requireInRange("beyond_reach_min_m2", beyond_reach_min_m2, 0.0, 1e4, "m^2");
+  requireInRange("view_beyond_reach_m", view_beyond_reach_m, 1e-6, 10.0, "m");
 }
 
 cv::Mat floorMask(const cv::Mat& states) { return (states == kFloor) / 255; }
@@ -478,6 +480,16 @@ void clearSmallRegions(cv::Mat& cells, const cv::Mat& regions, double min_extent
     for (int c = 0; c < cells.cols; ++c)
       if (cells.at<uint8_t>(r, c) && !keep[labels.at<int>(r, c)]) cells.at<uint8_t>(r, c) = 0;
 }
+/// Clears the set cells of `cells` (CV_8U) in 8-connected pieces of fewer than min_cells cells.
+void clearSmallAreas(cv::Mat& cells, double min_cells) {
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(cells != 0, labels, stats, centroids, 8, CV_32S);
+  for (int r = 0; r < labels.rows; ++r)
+    for (int c = 0; c < labels.cols; ++c) {
+      const int l = labels.at<int>(r, c);
+      if (l > 0 && l < n && stats.at<int>(l, cv::CC_STAT_AREA) < min_cells) cells.at<uint8_t>(r, c) = 0;
+    }
+}
 }  // namespace
 
 cv::Mat frontierCells(const cv::Mat& states, double min_unknown_cells, bool ignore_wall_base) {
@@ -698,6 +710,28 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   res.open =
       openCells(res.states, res.cost_map.cost, res.knowledge, res.blacklist, cfg.knowledge_threshold,
                 cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge, frontier);
+  const cv::Mat reached = res.cost_map.predecessor >= 0;
+  if (cfg.beyond_reach_min_m2 > 0.0 && cfg.occluded_frontier_knowledge > 0.0) {
+    // Floor next to a frontier that no path reaches, in large pieces: the reached cells near it
+    // stay open until their knowledge reaches occluded_frontier_knowledge.
+    const double fd = cfg.frontier_distance_m / res_m;
+    const cv::Mat near_frontier = squaredDistanceTransform(1 - frontier) <= fd * fd;
+    cv::Mat far_floor = (res.states == kFloor) & near_frontier & ~reached;
+    clearSmallAreas(far_floor, cfg.beyond_reach_min_m2 / g.cellArea());
+    res.beyond_reach = far_floor / 255;
+    if (cv::countNonZero(res.beyond_reach) > 0) {
+      const double view = cfg.view_beyond_reach_m / res_m;
+      const cv::Mat near_view = squaredDistanceTransform(1 - res.beyond_reach) <= view * view;
+      for (int r = 0; r < res.open.rows; ++r)
+        for (int c = 0; c < res.open.cols; ++c) {
+          if (res.open.at<uint8_t>(r, c) || !reached.at<uint8_t>(r, c) || !near_view.at<uint8_t>(r, c)) continue;
+          if (!res.blacklist.empty() && res.blacklist.at<uint8_t>(r, c)) continue;
+          if (res.knowledge.at<float>(r, c) >= cfg.occluded_frontier_knowledge) continue;
+          res.open.at<uint8_t>(r, c) = 1;
+          ++res.open_beyond_reach;
+        }
+    }
+  }
   if (cfg.min_open_area_m2 > 0.0) {  // small pieces of open cells are not open
     cv::Mat labels, stats, centroids;
     const int n = cv::connectedComponentsWithStats(res.open, labels, stats, centroids, 8, CV_32S);
@@ -713,7 +747,6 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   }
   timer.lap("evaluation_and_termination");
   res.open_cells = static_cast<size_t>(cv::countNonZero(res.open));
-  const cv::Mat reached = res.cost_map.predecessor >= 0;
   const int n_reached = cv::countNonZero(reached);
   const int n_known = cv::countNonZero(reached & (res.knowledge >= cfg.knowledge_threshold));
   res.coverage = n_reached > 0 ? static_cast<double>(n_known) / n_reached : 0.0;
@@ -807,6 +840,8 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
       " waypoints, " + fmt(res.target_cost_m) + " m, b = " + fmt(res.score, 4) +
       (res.target_gain_m2 >= 0.0 ? " (expected gain " + fmt(res.target_gain_m2, 1) + " m^2)" : std::string()) + ", " +
       std::to_string(res.open_cells) + " open cells" +
+      (res.open_beyond_reach > 0 ? " (" + std::to_string(res.open_beyond_reach) + " near floor seen beyond reach)"
+                                 : std::string()) +
       (res.target_moved_m > 0.0 ? " (moved " + fmt(res.target_moved_m) + " m off the wall)" : "");
 }
 

@@ -44,6 +44,15 @@ struct PlannerConfig {
   /// the robot passes (0.8 m: 0.2 m of accessible floor, 0.5 m deep) is 0.1 m^2. 0: every open
   /// cell counts [m^2], [0, 100]
   double min_open_area_m2 = 0.0;
+  /// Views beyond reach (termination and targets): floor next to a frontier that the robot cannot
+  /// reach yet (seen through a door whose sight cone is narrower than the robot where it starts:
+  /// the turtlebot3_house's south hall seen as two wedges from the corridor ended a mission at 67 %
+  /// of the floor), in 8-connected pieces of at least this area, makes the reached cells within
+  /// view_beyond_reach_m of it open while their knowledge is below occluded_frontier_knowledge: the
+  /// robot scans at the door until the floor beyond joins the reachable floor or that many scans
+  /// saw it. 0: off [m^2], [0, 1e4]
+  double beyond_reach_min_m2 = 0.0;
+  double view_beyond_reach_m = 1.0;  ///< see beyond_reach_min_m2 [m], (0, 10]
   /// An unknown cell whose only floor neighbours lie beside an obstacle cell (8-neighbours) is no
   /// frontier: it sits in or behind a wall (a wall base's floor cell, a noisy wall's outer face),
   /// not at the edge of a view into unknown space. false: the plain definition.
@@ -242,6 +251,8 @@ struct PlanResult {
   std::string complete_reason;
   size_t open_cells = 0;
   size_t open_cells_ignored = 0;  ///< open cells in pieces smaller than min_open_area_m2
+  size_t open_beyond_reach = 0;   ///< open cells from views beyond reach (beyond_reach_min_m2)
+  cv::Mat beyond_reach;           ///< floor next to a frontier, not reached, in large pieces (CV_8U; empty when off)
   double coverage = 0.0;          ///< reached cells with knowledge >= threshold / reached cells
   double floor_area_m2 = 0.0;
   double accessible_area_m2 = 0.0;
