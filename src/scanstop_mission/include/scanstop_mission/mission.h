@@ -118,11 +118,11 @@ struct MissionConfig {
   /// target, stands for the target's scan: the mission replans from there instead of driving on and
   /// scanning again (room_10x8: 4 of 19 scans were such pairs, 0.8-1.4 m apart; what the target
   /// would have seen the explorer asks for again if it still lacks). [m], [0, 10]; 0: off
-  double relocalize_as_target_m = 0.0;
+  double relocalize_as_target_m = 1.5;
   /// Planes of a scan taken only to re-localize (the leg check's, and after a target is given up):
   /// registration needs far fewer than the map (a 100-plane scan takes 10 s, not 40 s). 0: planes;
   /// else 50, 100, 200 or 400 (at most planes).
-  int relocalize_planes = 0;
+  int relocalize_planes = 100;
   /// A leg the check refuses before the robot moves (an obstruction within leg_check_margin_m of
   /// the body ahead, e.g. a door jamb the leg grazes from where the robot stopped): the robot first
   /// looks for a sidestep of at most this much (0.05 m steps, 16 directions) after which the whole
