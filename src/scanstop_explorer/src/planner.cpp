@@ -95,6 +95,7 @@ void PlannerConfig::validate() const {
   requireInRange("min_open_area_m2", min_open_area_m2, 0.0, 100.0, "m^2");
   requireInRange("beyond_reach_min_m2", beyond_reach_min_m2, 0.0, 1e4, "m^2");
   requireInRange("view_beyond_reach_m", view_beyond_reach_m, 1e-6, 10.0, "m");
+  requireInRange("rescan_distance_m", rescan_distance_m, 0.0, 5.0, "m");
 }
 
 cv::Mat floorMask(const cv::Mat& states) { return (states == kFloor) / 255; }
@@ -777,6 +778,7 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     res.message = "exploration complete";
     if (!in.goal) return;
   }
+  cv::Mat target_cells = reached & (res.blacklist == 0);  // where a target (or its move off a wall) may lie
   if (in.goal) {
     // The reached, not blacklisted cell nearest to the goal (first in raster order on ties).
     const cv::Point goal_cell = g.cellOf(in.goal->x(), in.goal->y());
@@ -797,16 +799,24 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
       return;
     }
   } else {
-    const cv::Mat candidates = (res.knowledge < cfg.knowledge_threshold) | (res.open != 0);
-    if (cfg.target_score == "gain")
-      chooseByGain(res, (cfg.gain_cells == "open" ? reached : candidates & reached) & (res.blacklist == 0), cfg);
+    cv::Mat candidates = (res.knowledge < cfg.knowledge_threshold) | (res.open != 0);
+    cv::Mat& allowed = target_cells;
+    if (cfg.rescan_distance_m > 0.0) {  // not where a scan was taken
+      std::vector<std::pair<Eigen::Vector2d, double>> scanned;
+      for (const Eigen::Vector2d& p : in.scan_positions) scanned.emplace_back(p, cfg.rescan_distance_m);
+      const cv::Mat near_scan = rasterizeDiscs(g, scanned) != 0;
+      candidates &= ~near_scan;
+      allowed &= ~near_scan;
+    }
+    if (cfg.target_score == "gain") chooseByGain(res, cfg.gain_cells == "open" ? allowed : candidates & allowed, cfg);
     if (res.target_cell.x < 0) res.target_cell = argmaxCell(res.evaluation, candidates);
     timer.lap(cfg.target_score == "gain" ? "target_by_gain" : "target");
   }
   if (res.target_cell.x < 0) {
     res.complete = true;
-    res.complete_reason = "every reachable cell that lacks knowledge is blacklisted as unreachable (" +
-                          std::to_string(res.open_cells) + " open cells left)";
+    res.complete_reason = "every reachable cell that lacks knowledge is blacklisted as unreachable" +
+                          std::string(cfg.rescan_distance_m > 0.0 ? " or within rescan_distance_m of a scan" : "") +
+                          " (" + std::to_string(res.open_cells) + " open cells left)";
     res.message = "exploration complete";
     return;
   }
@@ -814,7 +824,7 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   if (res.target_gain_m2 < 0.0) res.score = res.evaluation.at<float>(res.target_cell);
   {
     const cv::Point argmax = res.target_cell;
-    res.target_cell = clearTarget(res.sq_dt, reached & (res.blacklist == 0), argmax, cfg.target_clearance_m / res_m);
+    res.target_cell = clearTarget(res.sq_dt, target_cells, argmax, cfg.target_clearance_m / res_m);
     res.target_moved_m = std::hypot(res.target_cell.x - argmax.x, res.target_cell.y - argmax.y) * res_m;
   }
   res.target_cost_m = res.cost_map.cost.at<float>(res.target_cell) * res_m;

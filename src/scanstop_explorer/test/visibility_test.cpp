@@ -317,3 +317,46 @@ TEST(OpenPieces, FloorSeenBeyondReachKeepsTheCellsBeforeItOpenUntilScannedEnough
   EXPECT_TRUE(r.complete);
   EXPECT_LE(steps, 3);
 }
+
+TEST(OpenPieces, NoScanLocationWhereAScanWasTaken) {
+  // The view beyond reach of the test above: the cells before the door stay open until three scans
+  // had them in sight. With rescan_distance_m every new scan location lies that far from the earlier
+  // ones (a second scan on the same spot sees what the first saw).
+  const test::Scene s = test::twoRooms();
+  cv::Mat states = test::idealStates(s);
+  for (int r = 0; r < states.rows; ++r)
+    for (int c = 0; c < states.cols; ++c) {
+      const Eigen::Vector2d p = s.geometry.center({c, r});
+      if (p.x() > 3.9) states.at<uint8_t>(r, c) = kUnknown;
+      if (p.x() >= 4.3 && p.x() <= 6.0 && p.y() >= 1.6 && p.y() <= 2.4) states.at<uint8_t>(r, c) = kFloor;
+    }
+  PlannerConfig cfg;
+  cfg.knowledge_model = "visibility";
+  cfg.k_r_m = 2.5;
+  cfg.beyond_reach_min_m2 = 1.0;
+  cfg.rescan_distance_m = 0.3;
+  std::vector<Eigen::Vector2d> scans{{1.0, 1.0}, {1.0, 3.0}, {2.5, 2.0}};
+  PlanResult r = planStep(inputFor(s, states, scans, scans.back()), cfg);
+  int steps = 0;
+  for (; !r.complete && steps < 10; ++steps) {
+    for (const Eigen::Vector2d& p : scans) EXPECT_GE((r.target - p).norm(), 0.3 - 0.05) << "step " << steps;
+    scans.push_back(r.target);
+    r = planStep(inputFor(s, states, scans, scans.back()), cfg);
+    ASSERT_TRUE(r.success) << r.message;
+  }
+  EXPECT_TRUE(r.complete) << r.message;
+  EXPECT_GE(steps, 1);
+  // Off: a target within 0.25 m of an earlier scan comes up.
+  cfg.rescan_distance_m = 0.0;
+  scans = {{1.0, 1.0}, {1.0, 3.0}, {2.5, 2.0}};
+  r = planStep(inputFor(s, states, scans, scans.back()), cfg);
+  int repeated = 0;
+  for (int k = 0; !r.complete && k < 10; ++k) {
+    for (const Eigen::Vector2d& p : scans) repeated += (r.target - p).norm() < 0.25 ? 1 : 0;
+    scans.push_back(r.target);
+    r = planStep(inputFor(s, states, scans, scans.back()), cfg);
+  }
+  EXPECT_GT(repeated, 0);
+  cfg.rescan_distance_m = -0.1;
+  EXPECT_THROW(cfg.validate(), scanstop::ConfigError);
+}

@@ -47,6 +47,7 @@ void forEachParameter(ExplorerConfig& c, Visit&& visit) {
   visit("min_open_area_m2", c.planner.min_open_area_m2);
   visit("beyond_reach_min_m2", c.planner.beyond_reach_min_m2);
   visit("view_beyond_reach_m", c.planner.view_beyond_reach_m);
+  visit("rescan_distance_m", c.planner.rescan_distance_m);
   visit("known_free_radius_m", c.known_free_radius_m);
   visit("self_filter_radius_m", c.self_filter_radius_m);
   visit("target_tolerance_m", c.target_tolerance_m);

@@ -52,6 +52,11 @@ struct PlannerConfig {
   /// robot scans at the door until the floor beyond joins the reachable floor or that many scans
   /// saw it. 0: off [m^2], [0, 1e4]
   double beyond_reach_min_m2 = 0.0;
+  /// A new scan location closer than this to a past scan position is not chosen: a scan there sees
+  /// what that one saw (turtlebot3_house: the cells near a door counted open until 3 scans had them
+  /// in sight, and the explorer chose the robot's own cell, 2 cm away, for a second scan). Not for
+  /// goals. 0: off [m], [0, 5]
+  double rescan_distance_m = 0.0;
   double view_beyond_reach_m = 1.0;  ///< see beyond_reach_min_m2 [m], (0, 10]
   /// An unknown cell whose only floor neighbours lie beside an obstacle cell (8-neighbours) is no
   /// frontier: it sits in or behind a wall (a wall base's floor cell, a noisy wall's outer face),
