@@ -147,6 +147,10 @@ MissionNode::MissionNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   params.optional("robot_radius_m", robot_radius_m_);
   explorer_config_ = config_.run_dir + "/explorer/config.yaml";
   params.optional("explorer_config", explorer_config_);
+  params.optional("wait_for_recorder_s", wait_for_recorder_s_);
+  if (!(wait_for_recorder_s_ >= 0.0 && wait_for_recorder_s_ <= 600.0))
+    throw ConfigError("parameter '" + pnh.resolveName("wait_for_recorder_s") +
+                      "' = " + std::to_string(wait_for_recorder_s_) + " is outside [0, 600] s");
   params.optional("surface_planes", surface_planes_);
   if (surface_planes_ < 0 || surface_planes_ > 2000)
     throw ConfigError("parameter '" + pnh.resolveName("surface_planes") + "' = " + std::to_string(surface_planes_) +
@@ -345,6 +349,18 @@ void MissionNode::surfaceCoverage(const TriangleMesh& world, const Pose2D& start
 }
 
 void MissionNode::runMission() {
+  if (wait_for_recorder_s_ > 0.0 && status_pub_.getNumSubscribers() == 0) {
+    // The recorder subscribes to every topic it records at once; a subscriber of mission/status
+    // means it is up. Its connections to the other publishers follow within moments.
+    ROS_INFO("mission: waiting up to %.0f s for the recorder (a subscriber of mission/status)", wait_for_recorder_s_);
+    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(wait_for_recorder_s_);
+    while (status_pub_.getNumSubscribers() == 0 && ros::WallTime::now() < until && ros::ok())
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (status_pub_.getNumSubscribers() == 0)
+      ROS_WARN("mission: no recorder subscribed within %.0f s; starting without it", wait_for_recorder_s_);
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  }
   const State end = mission_->run();
   const MissionState state = mission_->snapshot();
   try {

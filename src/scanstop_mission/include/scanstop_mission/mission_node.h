@@ -78,6 +78,10 @@ class MissionNode {
   /// The explorer's configuration of this run (explorer_node writes it into its run_dir): the true
   /// coverage rebuilds the floor map with it.
   std::string explorer_config_;
+  /// Before the mission's first step, wait up to this long until something subscribes to
+  /// mission/status (the launch's rosbag recorder with record:=true), so that the bag holds the first
+  /// scan [s]; 0: do not wait.
+  double wait_for_recorder_s_ = 0.0;
   int surface_planes_ = 100;  ///< planes of the visible surface's candidate scans; 0: no surface coverage
   ros::Subscriber static_tf_sub_;
   std::mutex start_mutex_;
