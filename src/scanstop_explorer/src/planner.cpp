@@ -481,15 +481,21 @@ void clearSmallRegions(cv::Mat& cells, const cv::Mat& regions, double min_extent
     for (int c = 0; c < cells.cols; ++c)
       if (cells.at<uint8_t>(r, c) && !keep[labels.at<int>(r, c)]) cells.at<uint8_t>(r, c) = 0;
 }
-/// Clears the set cells of `cells` (CV_8U) in 8-connected pieces of fewer than min_cells cells.
-void clearSmallAreas(cv::Mat& cells, double min_cells) {
+/// Clears the set cells of `cells` (CV_8U) in 8-connected pieces of fewer than min_cells cells;
+/// returns how many it cleared.
+size_t clearSmallAreas(cv::Mat& cells, double min_cells) {
   cv::Mat labels, stats, centroids;
   const int n = cv::connectedComponentsWithStats(cells != 0, labels, stats, centroids, 8, CV_32S);
+  size_t cleared = 0;
   for (int r = 0; r < labels.rows; ++r)
     for (int c = 0; c < labels.cols; ++c) {
       const int l = labels.at<int>(r, c);
-      if (l > 0 && l < n && stats.at<int>(l, cv::CC_STAT_AREA) < min_cells) cells.at<uint8_t>(r, c) = 0;
+      if (l > 0 && l < n && stats.at<int>(l, cv::CC_STAT_AREA) < min_cells) {
+        cells.at<uint8_t>(r, c) = 0;
+        ++cleared;
+      }
     }
+  return cleared;
 }
 }  // namespace
 
@@ -719,10 +725,9 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     const cv::Mat near_frontier = squaredDistanceTransform(1 - frontier) <= fd * fd;
     cv::Mat far_floor = (res.states == kFloor) & near_frontier & ~reached;
     clearSmallAreas(far_floor, cfg.beyond_reach_min_m2 / g.cellArea());
-    res.beyond_reach = far_floor / 255;
-    if (cv::countNonZero(res.beyond_reach) > 0) {
+    if (cv::countNonZero(far_floor) > 0) {
       const double view = cfg.view_beyond_reach_m / res_m;
-      const cv::Mat near_view = squaredDistanceTransform(1 - res.beyond_reach) <= view * view;
+      const cv::Mat near_view = squaredDistanceTransform(1 - far_floor / 255) <= view * view;
       for (int r = 0; r < res.open.rows; ++r)
         for (int c = 0; c < res.open.cols; ++c) {
           if (res.open.at<uint8_t>(r, c) || !reached.at<uint8_t>(r, c) || !near_view.at<uint8_t>(r, c)) continue;
@@ -733,19 +738,8 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
         }
     }
   }
-  if (cfg.min_open_area_m2 > 0.0) {  // small pieces of open cells are not open
-    cv::Mat labels, stats, centroids;
-    const int n = cv::connectedComponentsWithStats(res.open, labels, stats, centroids, 8, CV_32S);
-    const double min_cells = cfg.min_open_area_m2 / g.cellArea();
-    for (int r = 0; r < labels.rows; ++r)
-      for (int c = 0; c < labels.cols; ++c) {
-        const int l = labels.at<int>(r, c);
-        if (l > 0 && l < n && stats.at<int>(l, cv::CC_STAT_AREA) < min_cells) {
-          res.open.at<uint8_t>(r, c) = 0;
-          ++res.open_cells_ignored;
-        }
-      }
-  }
+  if (cfg.min_open_area_m2 > 0.0)  // small pieces of open cells are not open
+    res.open_cells_ignored = clearSmallAreas(res.open, cfg.min_open_area_m2 / g.cellArea());
   timer.lap("evaluation_and_termination");
   res.open_cells = static_cast<size_t>(cv::countNonZero(res.open));
   const int n_reached = cv::countNonZero(reached);
@@ -782,11 +776,10 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
   if (in.goal) {
     // The reached, not blacklisted cell nearest to the goal (first in raster order on ties).
     const cv::Point goal_cell = g.cellOf(in.goal->x(), in.goal->y());
-    const cv::Mat allowed = reached & (res.blacklist == 0);
     double best = std::numeric_limits<double>::infinity();
-    for (int r = 0; r < allowed.rows; ++r)
-      for (int c = 0; c < allowed.cols; ++c) {
-        if (!allowed.at<uint8_t>(r, c)) continue;
+    for (int r = 0; r < target_cells.rows; ++r)
+      for (int c = 0; c < target_cells.cols; ++c) {
+        if (!target_cells.at<uint8_t>(r, c)) continue;
         const double d2 = std::pow(c - goal_cell.x, 2) + std::pow(r - goal_cell.y, 2);
         if (d2 < best) {
           best = d2;
@@ -800,15 +793,15 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     }
   } else {
     cv::Mat candidates = (res.knowledge < cfg.knowledge_threshold) | (res.open != 0);
-    cv::Mat& allowed = target_cells;
     if (cfg.rescan_distance_m > 0.0) {  // not where a scan was taken
       std::vector<std::pair<Eigen::Vector2d, double>> scanned;
       for (const Eigen::Vector2d& p : in.scan_positions) scanned.emplace_back(p, cfg.rescan_distance_m);
       const cv::Mat near_scan = rasterizeDiscs(g, scanned) != 0;
       candidates &= ~near_scan;
-      allowed &= ~near_scan;
+      target_cells &= ~near_scan;
     }
-    if (cfg.target_score == "gain") chooseByGain(res, cfg.gain_cells == "open" ? allowed : candidates & allowed, cfg);
+    if (cfg.target_score == "gain")
+      chooseByGain(res, cfg.gain_cells == "open" ? target_cells : candidates & target_cells, cfg);
     if (res.target_cell.x < 0) res.target_cell = argmaxCell(res.evaluation, candidates);
     timer.lap(cfg.target_score == "gain" ? "target_by_gain" : "target");
   }

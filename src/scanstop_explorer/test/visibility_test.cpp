@@ -21,6 +21,18 @@ PlanInput inputFor(const test::Scene& s, const cv::Mat& states, const std::vecto
   return in;
 }
 float at(const cv::Mat& m, const GridGeometry& g, double x, double y) { return m.at<float>(g.cellOf(x, y)); }
+/// The two rooms with room 1 known, the doorway's floor not seen, and of room 2 only a 1.7 x 0.8 m
+/// wedge seen through the door (x 4.3-6.0 m, y 1.6-2.4 m): floor that no path reaches.
+cv::Mat wedgeBeyondTheDoor(const test::Scene& s) {
+  cv::Mat states = test::idealStates(s);
+  for (int r = 0; r < states.rows; ++r)
+    for (int c = 0; c < states.cols; ++c) {
+      const Eigen::Vector2d p = s.geometry.center({c, r});
+      if (p.x() > 3.9) states.at<uint8_t>(r, c) = kUnknown;
+      if (p.x() >= 4.3 && p.x() <= 6.0 && p.y() >= 1.6 && p.y() <= 2.4) states.at<uint8_t>(r, c) = kFloor;
+    }
+  return states;
+}
 }  // namespace
 
 TEST(VisibilityKnowledge, ACellBehindAWallWithinTheRadiusGetsNothingTheDiscGivesItOne) {
@@ -265,6 +277,17 @@ TEST(GainChoice, CountingOpenCellsAScanSpotThatSeesNoneGainsNothing) {
   EXPECT_FLOAT_EQ(at(r.gain, s.geometry, 0.5, 0.5), 0.0f);
   EXPECT_GT(r.target.x(), 3.5) << r.message;
   EXPECT_GT(r.target_gain_m2, 1.0);
+  // The chosen gain is what a scan at the target would add of the unknown and open cells, not of
+  // the unknown and lacking ones (the two differ there).
+  cv::Mat here = cv::Mat::zeros(states.size(), CV_8U);
+  here.at<uint8_t>(r.target_cell) = 1;
+  const cv::Mat open = r.open != 0;
+  const float open_gain =
+      gainMap(states, s.geometry, (states == kUnknown) | open, open, here, cfg.k_r_m, 1, 1).at<float>(r.target_cell);
+  const float lacking_gain =
+      gainMap(states, s.geometry, r.knowledge, cfg.knowledge_threshold, here, cfg.k_r_m, 1, 1).at<float>(r.target_cell);
+  EXPECT_FLOAT_EQ(static_cast<float>(r.target_gain_m2), open_gain);
+  EXPECT_NE(open_gain, lacking_gain);
   // "lacking" (room 1 has knowledge everywhere) picks the same side.
   PlannerConfig lacking = cfg;
   lacking.gain_cells = "lacking";
@@ -278,13 +301,7 @@ TEST(OpenPieces, FloorSeenBeyondReachKeepsTheCellsBeforeItOpenUntilScannedEnough
   // wedge seen through it: floor that no path reaches. One scan 1.5 m before the door gave the
   // cells there knowledge, so the plain rule calls exploration complete.
   const test::Scene s = test::twoRooms();
-  cv::Mat states = test::idealStates(s);
-  for (int r = 0; r < states.rows; ++r)
-    for (int c = 0; c < states.cols; ++c) {
-      const Eigen::Vector2d p = s.geometry.center({c, r});
-      if (p.x() > 3.9) states.at<uint8_t>(r, c) = kUnknown;
-      if (p.x() >= 4.3 && p.x() <= 6.0 && p.y() >= 1.6 && p.y() <= 2.4) states.at<uint8_t>(r, c) = kFloor;
-    }
+  const cv::Mat states = wedgeBeyondTheDoor(s);
   std::vector<Eigen::Vector2d> scans{{1.0, 1.0}, {1.0, 3.0}, {2.5, 2.0}};
   PlannerConfig cfg;
   cfg.knowledge_model = "visibility";
@@ -323,13 +340,7 @@ TEST(OpenPieces, NoScanLocationWhereAScanWasTaken) {
   // had them in sight. With rescan_distance_m every new scan location lies that far from the earlier
   // ones (a second scan on the same spot sees what the first saw).
   const test::Scene s = test::twoRooms();
-  cv::Mat states = test::idealStates(s);
-  for (int r = 0; r < states.rows; ++r)
-    for (int c = 0; c < states.cols; ++c) {
-      const Eigen::Vector2d p = s.geometry.center({c, r});
-      if (p.x() > 3.9) states.at<uint8_t>(r, c) = kUnknown;
-      if (p.x() >= 4.3 && p.x() <= 6.0 && p.y() >= 1.6 && p.y() <= 2.4) states.at<uint8_t>(r, c) = kFloor;
-    }
+  const cv::Mat states = wedgeBeyondTheDoor(s);
   PlannerConfig cfg;
   cfg.knowledge_model = "visibility";
   cfg.k_r_m = 2.5;

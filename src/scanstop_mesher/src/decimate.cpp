@@ -463,21 +463,29 @@ DecimateStats decimateInHalves(TriangleMesh& mesh, const DecimateConfig& config,
   }
   if (!original.normals.empty()) mesh.normals = vertexNormalsFromFaces(mesh);
   DecimateStats s;
+  for (const DecimateStats& p : part) s.add(p);
+  // The halves share the seam's vertices: the whole mesh's counts, and the wall time of both threads.
   s.faces_before = nf;
   s.vertices_before = nv;
   s.faces_after = mesh.faces.size();
   s.vertices_after = mesh.vertices.size();
-  for (const DecimateStats& p : part) {
-    s.collapses += p.collapses;
-    s.refused += p.refused;
-    s.locked_vertices += p.locked_vertices;
-    s.max_error_m = std::max(s.max_error_m, p.max_error_m);
-  }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return s;
 }
 
 }  // namespace
+
+void DecimateStats::add(const DecimateStats& part) {
+  faces_before += part.faces_before;
+  faces_after += part.faces_after;
+  vertices_before += part.vertices_before;
+  vertices_after += part.vertices_after;
+  collapses += part.collapses;
+  refused += part.refused;
+  locked_vertices += part.locked_vertices;
+  max_error_m = std::max(max_error_m, part.max_error_m);
+  seconds += part.seconds;
+}
 
 DecimateStats decimateMesh(TriangleMesh& mesh, const DecimateConfig& config, const std::vector<char>& pinned) {
   config.validate();

@@ -891,17 +891,7 @@ FusedMesh meshFusedMapInSlabs(const std::string& dir, const FusedMapConfig& conf
           const int cell = static_cast<int>(std::floor(m.vertices[i].x() / vs));
           pinned[i] = cell <= a || cell >= b - 1;
         }
-        const DecimateStats d = decimateMesh(m, *decimate_slabs, pinned);
-        DecimateStats& sum = out.decimated;
-        sum.faces_before += d.faces_before;
-        sum.faces_after += d.faces_after;
-        sum.vertices_before += d.vertices_before;
-        sum.vertices_after += d.vertices_after;
-        sum.collapses += d.collapses;
-        sum.refused += d.refused;
-        sum.locked_vertices += d.locked_vertices;
-        sum.max_error_m = std::max(sum.max_error_m, d.max_error_m);
-        sum.seconds += d.seconds;
+        out.decimated.add(decimateMesh(m, *decimate_slabs, pinned));
       }
       std::vector<int> index(m.vertices.size());
       for (size_t i = 0; i < m.vertices.size(); ++i) {

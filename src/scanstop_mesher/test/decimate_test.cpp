@@ -264,3 +264,28 @@ TEST(Decimate, RepeatedIndicesAndNonManifoldEdgesDoNotBreakIt) {
 }
 
 }  // namespace
+
+TEST(DecimateStats, AddSumsThePartsAndKeepsTheLargestError) {
+  DecimateStats a, b;
+  a.faces_before = 10;
+  a.faces_after = 4;
+  a.vertices_before = 8;
+  a.vertices_after = 5;
+  a.collapses = 3;
+  a.refused = 1;
+  a.locked_vertices = 2;
+  a.max_error_m = 0.002;
+  a.seconds = 1.5;
+  b = a;
+  b.max_error_m = 0.001;
+  a.add(b);
+  EXPECT_EQ(a.faces_before, 20u);
+  EXPECT_EQ(a.faces_after, 8u);
+  EXPECT_EQ(a.vertices_before, 16u);
+  EXPECT_EQ(a.vertices_after, 10u);
+  EXPECT_EQ(a.collapses, 6u);
+  EXPECT_EQ(a.refused, 2u);
+  EXPECT_EQ(a.locked_vertices, 4u);
+  EXPECT_DOUBLE_EQ(a.max_error_m, 0.002);
+  EXPECT_DOUBLE_EQ(a.seconds, 3.0);
+}

@@ -257,7 +257,6 @@ struct PlanResult {
   size_t open_cells = 0;
   size_t open_cells_ignored = 0;  ///< open cells in pieces smaller than min_open_area_m2
   size_t open_beyond_reach = 0;   ///< open cells from views beyond reach (beyond_reach_min_m2)
-  cv::Mat beyond_reach;           ///< floor next to a frontier, not reached, in large pieces (CV_8U; empty when off)
   double coverage = 0.0;          ///< reached cells with knowledge >= threshold / reached cells
   double floor_area_m2 = 0.0;
   double accessible_area_m2 = 0.0;

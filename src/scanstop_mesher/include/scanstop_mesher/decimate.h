@@ -51,6 +51,9 @@ struct DecimateStats {
   size_t locked_vertices = 0;  ///< boundary, non-manifold or seam vertices that stayed where they were
   double max_error_m = 0.0;    ///< largest sqrt(cost) of an applied collapse [m]
   double seconds = 0.0;
+
+  /// Adds another part's figures (counts and seconds summed, the largest error kept).
+  void add(const DecimateStats& part);
 };
 
 /// Decimates the mesh in place (vertices, faces; normals recomputed from the faces, area-weighted,
