@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 #include "scanstop_common/config.h"
 
@@ -24,6 +26,7 @@ void SlamConfig::validate() const {
   requireInRange("max_points_per_voxel", max_points_per_voxel, 1, 100000);
   requireInRange("map_spacing_m", map_spacing_m, 0.0, icp.c_max_m, "m");
   requireInRange("odom_scale_min_travel_m", odom_scale_min_travel_m, 0.01, 100.0, "m");
+  requireInRange("odom_turn_min_total_rad", odom_turn_min_total_rad, 0.0, 1000.0, "rad");
   requireInRange("prior_sigma_m", prior_sigma_m, 1e-6, 10.0, "m");
   requireInRange("prior_sigma_per_m", prior_sigma_per_m, 0.0, 1.0);
   requireInRange("prior_sigma_rad", prior_sigma_rad, 1e-6, M_PI, "rad");
@@ -32,6 +35,7 @@ void SlamConfig::validate() const {
   requireInRange("prior_gate", prior_gate, 1e-6, 1e6);
   requireInRange("odometry_gate", odometry_gate, 0.0, 1e6);
   requireInRange("odometry_gate_rms_ratio", odometry_gate_rms_ratio, 1.0, 100.0);
+  requireInRange("odometry_gate_weak_rms_ratio", odometry_gate_weak_rms_ratio, 1.0, 100.0);
   requireInRange("failure_retry_degeneracy_ratio", failure_retry_degeneracy_ratio, 0.0, 1.0);
   requireInRange("max_point_distance_m", max_point_distance_m, 0.1, 10000.0, "m");
   requireInRange("max_odom_jump_m", max_odom_jump_m, 0.01, 100000.0, "m");
@@ -255,6 +259,35 @@ void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, 
         r.gate_replaced = true;
         r.guess_distance = first_distance;
         icp_result = retry;
+      } else if (config_.failure_retry_degeneracy_ratio > config_.icp.degeneracy_ratio) {
+        // Neither result lies within the gate: the scan may have slid along a direction the pairs
+        // hold too weakly to be counted weak at degeneracy_ratio (office_large seed 1, scan 88 in
+        // the 48 m hall: condition 95, 27.6 cm from a guess 2 cm off, also against the map at the
+        // true poses, with a 12 % lower rms). Registered once more with more directions counted
+        // weak (kept at the guess), as a failed registration is; that result stands when it lies
+        // within the gate and fits the map as well, or, when the first result's own condition
+        // counts as weak at that ratio, nearly as well (odometry_gate_weak_rms_ratio: a slide along
+        // a weakly held direction fits a little better than the truth; a guess that is truly off
+        // fits much worse when held there: office_loop seed 1 scan 61, 1.48 times the rms).
+        IcpConfig wider = config_.icp;
+        wider.degeneracy_ratio = config_.failure_retry_degeneracy_ratio;
+        Registration third = r;
+        const IcpResult held = registerStages(target, source, start, origin, &third, prior, true, &wider);
+        const bool weakly_held = icp_result.condition * config_.failure_retry_degeneracy_ratio > 1.0;
+        const double rms_ratio = weakly_held
+                                     ? std::max(config_.odometry_gate_rms_ratio, config_.odometry_gate_weak_rms_ratio)
+                                     : config_.odometry_gate_rms_ratio;
+        if (held.converged && held.rms_m <= rms_ratio * icp_result.rms_m &&
+            guessDistance(r.guess, Pose2D::fromIsometry3d(held.T_target_source), prior_information) <=
+                config_.odometry_gate) {
+          const double first_distance = r.guess_distance;
+          r = third;
+          r.gate_retried = true;
+          r.gate_replaced = true;
+          r.gate_widened = true;
+          r.guess_distance = first_distance;
+          icp_result = held;
+        }
       }
     }
   }
@@ -443,6 +476,30 @@ double IcpSlam::odomScale() const {
   return std::min(1.25, std::max(0.8, lo / oo));
 }
 
+std::pair<double, double> IcpSlam::odomTurn() const {
+  // Least squares of m = k o + b over the legs: o the odometry's yaw change, m the registered one.
+  double s_oo = 0.0, s_o = 0.0, s_mo = 0.0, s_m = 0.0, turned = 0.0;
+  int legs = 0;
+  for (size_t i = 1; i < kept_.size(); ++i) {
+    if (!kept_[i].scale_evidence) continue;
+    const Pose2D o = kept_[i - 1].odom.between(kept_[i].odom);
+    if (std::hypot(o.x, o.y) < config_.odom_scale_min_travel_m) continue;
+    const Pose2D m = kept_[i - 1].pose.between(kept_[i].pose);
+    s_oo += o.yaw * o.yaw;
+    s_o += o.yaw;
+    s_mo += m.yaw * o.yaw;
+    s_m += m.yaw;
+    turned += std::abs(o.yaw);
+    ++legs;
+  }
+  const double det = legs * s_oo - s_o * s_o;
+  if (legs < 3 || turned < config_.odom_turn_min_total_rad || det <= 1e-9) return {1.0, 0.0};
+  const double k = (legs * s_mo - s_o * s_m) / det;
+  const double b = (s_m - k * s_o) / legs;
+  const double b_max = 3.0 * M_PI / 180.0;
+  return {std::min(1.1, std::max(0.9, k)), std::min(b_max, std::max(-b_max, b))};
+}
+
 std::vector<Eigen::Vector3f> IcpSlam::sample(const std::vector<Eigen::Vector3f>& points, double voxel_m) const {
   return config_.source_centroids ? voxelCentroids(points, voxel_m) : voxelDownsample(points, voxel_m);
 }
@@ -477,6 +534,16 @@ Registration IcpSlam::registerScan(const PointCloud& scan_base, const Pose2D& od
     r.odom_scale = config_.odom_scale_estimation ? odomScale() : 1.0;
     delta.x *= r.odom_scale;
     delta.y *= r.odom_scale;
+    if (config_.odom_turn_estimation) {
+      std::tie(r.odom_turn_scale, r.odom_leg_turn_rad) = odomTurn();
+      const bool leg = std::hypot(delta.x, delta.y) >= config_.odom_scale_min_travel_m;
+      if (!leg) r.odom_leg_turn_rad = 0.0;
+      // The robot turned (k - 1) * yaw more than the odometry says before it drove.
+      const double extra = (r.odom_turn_scale - 1.0) * delta.yaw;
+      const double c = std::cos(extra), s = std::sin(extra);
+      delta = Pose2D(c * delta.x - s * delta.y, s * delta.x + c * delta.y,
+                     normalizeAngle(r.odom_turn_scale * delta.yaw + r.odom_leg_turn_rad));
+    }
     r.odom_leg = delta;
     r.guess = last_map_ * delta;
   }

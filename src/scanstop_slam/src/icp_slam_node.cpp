@@ -58,6 +58,7 @@ class IcpSlamNode {
     optional("prior_gate", config.prior_gate);
     optional("odometry_gate", config.odometry_gate);
     optional("odometry_gate_rms_ratio", config.odometry_gate_rms_ratio);
+    optional("odometry_gate_weak_rms_ratio", config.odometry_gate_weak_rms_ratio);
     optional("failure_retry_degeneracy_ratio", config.failure_retry_degeneracy_ratio);
     params.degrees("prior_sigma_deg_per_m", config.prior_sigma_rad_per_m, 0.0, 57.0);
     optional("c_max_m", config.icp.c_max_m);
@@ -72,6 +73,8 @@ class IcpSlamNode {
     optional("source_centroids", config.source_centroids);
     optional("odom_scale_estimation", config.odom_scale_estimation);
     optional("odom_scale_min_travel_m", config.odom_scale_min_travel_m);
+    optional("odom_turn_estimation", config.odom_turn_estimation);
+    optional("odom_turn_min_total_rad", config.odom_turn_min_total_rad);
     optional("max_points_per_voxel", config.max_points_per_voxel);
     optional("map_spacing_m", config.map_spacing_m);
     optional("coarse_c_max_m", config.coarse_c_max_m);
@@ -256,14 +259,16 @@ class IcpSlamNode {
     if (r.converged)
       ROS_INFO(
           "icp_slam_node: scan %u at %s after %d iterations, %zu correspondences, rms %.1f mm, %.2f s, "
-          "condition %.3g%s%s, odometry scale %.4f, prior %.1f sigma, weak directions %.1f cm %.2f deg from the remap",
+          "condition %.3g%s%s, odometry scale %.4f, turn scale %.4f, %.2f deg per leg, prior %.1f sigma, weak "
+          "directions %.1f cm %.2f deg from the remap",
           r.index, r.map_pose.toString().c_str(), r.iterations, r.correspondences, r.rms_m * 1000, r.time_s,
           r.condition, r.degenerate ? " (degenerate" : "",
           r.degenerate ? (r.remapped ? (slam_->config().odometry_prior ? ", held by the odometry prior)"
                                                                        : ", guess kept along the weak direction)")
                                      : ")")
                        : "",
-          r.odom_scale, r.prior_distance, r.weak_gain_m * 100, r.weak_gain_rad * 180 / M_PI);
+          r.odom_scale, r.odom_turn_scale, r.odom_leg_turn_rad * 180 / M_PI, r.prior_distance, r.weak_gain_m * 100,
+          r.weak_gain_rad * 180 / M_PI);
     else
       ROS_WARN("icp_slam_node: scan %u: %s", r.index, res.message.c_str());
     if (r.prior_rejected)
@@ -276,7 +281,11 @@ class IcpSlamNode {
           "icp_slam_node: scan %u: the registration ended %.1f sigma from the odometry guess (beyond "
           "odometry_gate %.1f): registered again without the coarse stage; %s",
           r.index, r.guess_distance, slam_->config().odometry_gate,
-          r.gate_replaced ? "that result stands" : "it did not land within the gate as well: the first stands");
+          r.gate_widened    ? "it did not land within the gate either; registered once more keeping the guess along "
+                              "more weakly held directions (failure_retry_degeneracy_ratio): that result stands"
+          : r.gate_replaced ? "that result stands"
+                            : "neither it nor a third registration keeping the guess along more weakly held "
+                              "directions landed within the gate: the first stands");
     if (r.failure_retried)
       ROS_WARN(
           "icp_slam_node: scan %u: the registration failed (%s): registered again with degeneracy_ratio %.3f "

@@ -27,13 +27,15 @@ namespace {
 constexpr const char* kUsage =
     "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof] [--skip-bad]\n"
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
-    "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--odom-scale-min-travel M]\n"
+    "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--no-odom-turn]\n"
+    "                  [--odom-scale-min-travel M]\n"
     "                  [--coarse-point-to-plane] [--isolated odometry|truth [--from N]]\n"
     "                  [--odometry-prior | --no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] "
     "[--prior-sigma-deg D]\n"
     "                  [--prior-sigma-angle-per-rad F] [--prior-sigma-deg-per-m D] [--information-points N]\n"
     "                  [--information-sigma M] [--prior-gate SIGMAS] [--prior-all-directions]\n"
     "                  [--odometry-gate SIGMAS (default 5, 0 = off)] [--odometry-gate-rms-ratio F]\n"
+    "                  [--odometry-gate-weak-rms-ratio F]\n"
     "                  [--failure-retry-degeneracy-ratio R (default 0.05, 0 = off)]\n"
     "                  [--coarse-c-max M (0 = single stage)] [--refine-t-c M (0 = no refinement)]\n"
     "                  [--refine-r-c-deg D] [--refine-max-iterations N] [--refine-source-voxel M]\n"
@@ -103,6 +105,7 @@ int replayIsolated(const MapDirectory& in, const std::vector<std::optional<Pose2
             r.prior_rejected ? " (beyond prior_gate: registered without its weight)" : "",
             r.degenerate ? " degenerate" : "", weakText(r, *t).c_str(),
             !r.gate_retried   ? ""
+            : r.gate_widened  ? " (beyond odometry_gate: registered again with failure_retry_degeneracy_ratio)"
             : r.gate_replaced ? " (beyond odometry_gate: registered again without the coarse stage)"
                               : " (beyond odometry_gate; the second registration did not stand)",
             !r.failure_retried   ? ""
@@ -167,11 +170,13 @@ int main(int argc, char** argv) {
       .real("--prior-gate", config.prior_gate, 1e-6, 1e6)
       .real("--odometry-gate", config.odometry_gate, 0.0, 1e6)
       .real("--odometry-gate-rms-ratio", config.odometry_gate_rms_ratio, 1.0, 100.0)
+      .real("--odometry-gate-weak-rms-ratio", config.odometry_gate_weak_rms_ratio, 1.0, 100.0)
       .real("--failure-retry-degeneracy-ratio", config.failure_retry_degeneracy_ratio, 0.0, 1.0)
       .flag("--prior-all-directions", config.icp.prior_all_directions)
       .real("--information-points", config.icp.information_points, 1e-6, 1e6)
       .real("--information-sigma", config.icp.information_sigma_m, 1e-6, 1.0)
       .flag("--no-odom-scale", config.odom_scale_estimation, false)
+      .flag("--no-odom-turn", config.odom_turn_estimation, false)
       .flag("--coarse-point-to-plane", config.coarse_point_to_point, false)
       .real("--odom-scale-min-travel", config.odom_scale_min_travel_m, 0.01, 100.0)
       .flag("--skip-bad", skip_bad)
