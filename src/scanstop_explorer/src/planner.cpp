@@ -673,6 +673,14 @@ PlanResult computeMaps(const PlanInput& in, const PlannerConfig& cfg) {
 }
 
 namespace {
+/// The part of complete_reason that names unexplored floor cut off from the robot (PlanResult::cut_off_area_m2).
+std::string cutOffText(double cut_off_m2) {
+  if (cut_off_m2 < 0.5) return "";
+  return "; " + fmt(cut_off_m2, 1) +
+         " m^2 of accessible floor next to unexplored space is not connected to the robot in the floor map (a door "
+         "the map shows too narrow for the robot, or closed by map error): it stays unexplored";
+}
+
 /// target_score "gain": the sampled candidate with the largest g / (c + c0) whose gain g reaches
 /// min_gain_m2 (first in raster order on ties); sets target_cell, score and target_gain_m2, or
 /// leaves target_cell at (-1, -1).
@@ -718,11 +726,14 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
       openCells(res.states, res.cost_map.cost, res.knowledge, res.blacklist, cfg.knowledge_threshold,
                 cfg.frontier_distance_m / res_m, res.occluded_frontier, cfg.occluded_frontier_knowledge, frontier);
   const cv::Mat reached = res.cost_map.predecessor >= 0;
+  const double fd = cfg.frontier_distance_m / res_m;
+  const cv::Mat near_frontier = squaredDistanceTransform(1 - frontier) <= fd * fd;
+  res.cut_off_area_m2 =
+      cv::countNonZero((res.accessible != 0) & ~reached & near_frontier & (res.knowledge < cfg.knowledge_threshold)) *
+      g.cellArea();
   if (cfg.beyond_reach_min_m2 > 0.0 && cfg.occluded_frontier_knowledge > 0.0) {
     // Floor next to a frontier that no path reaches, in large pieces: the reached cells near it
     // stay open until their knowledge reaches occluded_frontier_knowledge.
-    const double fd = cfg.frontier_distance_m / res_m;
-    const cv::Mat near_frontier = squaredDistanceTransform(1 - frontier) <= fd * fd;
     cv::Mat far_floor = (res.states == kFloor) & near_frontier & ~reached;
     clearSmallAreas(far_floor, cfg.beyond_reach_min_m2 / g.cellArea());
     if (cv::countNonZero(far_floor) > 0) {
@@ -768,7 +779,7 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
              ? ", " + std::to_string(res.open_cells_ignored) +
                    " open cells in pieces under min_open_area_m2 = " + fmt(cfg.min_open_area_m2, 3) + " m^2 ignored"
              : std::string()) +
-        ")";
+        ")" + cutOffText(res.cut_off_area_m2);
     res.message = "exploration complete";
     if (!in.goal) return;
   }
@@ -809,7 +820,7 @@ void choosePlan(PlanResult& res, const PlanInput& in, const PlannerConfig& cfg) 
     res.complete = true;
     res.complete_reason = "every reachable cell that lacks knowledge is blacklisted as unreachable" +
                           std::string(cfg.rescan_distance_m > 0.0 ? " or within rescan_distance_m of a scan" : "") +
-                          " (" + std::to_string(res.open_cells) + " open cells left)";
+                          " (" + std::to_string(res.open_cells) + " open cells left)" + cutOffText(res.cut_off_area_m2);
     res.message = "exploration complete";
     return;
   }

@@ -253,8 +253,9 @@ std::string planToJson(const PlanResult& r) {
     << ", \"target_moved_m\": " << num(r.target_moved_m) << ", \"target_gain_m2\": " << num(r.target_gain_m2)
     << ", \"coverage\": " << num(r.coverage) << ", \"floor_area_m2\": " << num(r.floor_area_m2)
     << ", \"accessible_area_m2\": " << num(r.accessible_area_m2)
-    << ", \"reachable_area_m2\": " << num(r.reachable_area_m2) << ", \"open_cells\": " << r.open_cells
-    << ", \"open_cells_ignored\": " << r.open_cells_ignored << ", \"open_beyond_reach\": " << r.open_beyond_reach
+    << ", \"reachable_area_m2\": " << num(r.reachable_area_m2) << ", \"cut_off_area_m2\": " << num(r.cut_off_area_m2)
+    << ", \"open_cells\": " << r.open_cells << ", \"open_cells_ignored\": " << r.open_cells_ignored
+    << ", \"open_beyond_reach\": " << r.open_beyond_reach
     << ", \"landmarks\": " << (r.cost_map.nodes.empty() ? 0 : r.cost_map.nodes.size() - 1)
     << ", \"coverage_landmarks\": " << r.cost_map.coverage_landmarks << ", \"path\": [";
   for (size_t i = 0; i < r.path.size(); ++i)
