@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Full-resolution exploration benchmark (not part of the test command): runs
 # launch/sim_explore.launch headless for each world (default: room_10x8 office_loop corridor
-# turtlebot3_house furnished_1..3 office_large; office_large takes hours) at 400 planes with the thesis error profile and prints, per world, the scans,
+# turtlebot3_house furnished_1..3 office_large; office_large takes 5-15 min of wall time) at 400 planes with the thesis error profile and prints, per world, the scans,
 # coverage, collisions, the pose error of every scan against ground truth (ATE RMS and max, SLAM and
 # odometry alone) and the final one, the body's smallest true clearance and the legs closer than
 # 5 cm, and the compute per cycle (register + plan) next to the
