@@ -248,17 +248,25 @@ void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, 
     r.guess_distance = guessDistance(r.guess, Pose2D::fromIsometry3d(icp_result.T_target_source), prior_information);
     if (r.guess_distance > config_.odometry_gate) {
       r.gate_retried = true;
-      Registration second = r;
-      const IcpResult retry = registerStages(target, source, start, origin, &second, prior, false);
-      if (retry.converged && retry.rms_m <= config_.odometry_gate_rms_ratio * icp_result.rms_m &&
-          guessDistance(r.guess, Pose2D::fromIsometry3d(retry.T_target_source), prior_information) <=
-              config_.odometry_gate) {
+      // A later result stands when it converged within the gate at an rms of at most ratio times the first's.
+      const auto stands = [&](const IcpResult& later, double ratio) {
+        return later.converged && later.rms_m <= ratio * icp_result.rms_m &&
+               guessDistance(r.guess, Pose2D::fromIsometry3d(later.T_target_source), prior_information) <=
+                   config_.odometry_gate;
+      };
+      const auto replace = [&](const Registration& later_r, const IcpResult& later, bool widened) {
         const double first_distance = r.guess_distance;
-        r = second;
+        r = later_r;
         r.gate_retried = true;
         r.gate_replaced = true;
+        r.gate_widened = widened;
         r.guess_distance = first_distance;
-        icp_result = retry;
+        icp_result = later;
+      };
+      Registration second = r;
+      const IcpResult retry = registerStages(target, source, start, origin, &second, prior, false);
+      if (stands(retry, config_.odometry_gate_rms_ratio)) {
+        replace(second, retry, false);
       } else if (config_.failure_retry_degeneracy_ratio > config_.icp.degeneracy_ratio) {
         // Neither result lies within the gate: the scan may have slid along a direction the pairs
         // hold too weakly to be counted weak at degeneracy_ratio (office_large seed 1, scan 88 in
@@ -274,20 +282,9 @@ void IcpSlam::registerInto(const VoxelMap& target, const PointCloud& scan_base, 
         Registration third = r;
         const IcpResult held = registerStages(target, source, start, origin, &third, prior, true, &wider);
         const bool weakly_held = icp_result.condition * config_.failure_retry_degeneracy_ratio > 1.0;
-        const double rms_ratio = weakly_held
-                                     ? std::max(config_.odometry_gate_rms_ratio, config_.odometry_gate_weak_rms_ratio)
-                                     : config_.odometry_gate_rms_ratio;
-        if (held.converged && held.rms_m <= rms_ratio * icp_result.rms_m &&
-            guessDistance(r.guess, Pose2D::fromIsometry3d(held.T_target_source), prior_information) <=
-                config_.odometry_gate) {
-          const double first_distance = r.guess_distance;
-          r = third;
-          r.gate_retried = true;
-          r.gate_replaced = true;
-          r.gate_widened = true;
-          r.guess_distance = first_distance;
-          icp_result = held;
-        }
+        if (stands(held, weakly_held ? std::max(config_.odometry_gate_rms_ratio, config_.odometry_gate_weak_rms_ratio)
+                                     : config_.odometry_gate_rms_ratio))
+          replace(third, held, true);
       }
     }
   }
