@@ -409,6 +409,21 @@ std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>&
   return out;
 }
 
+void VoxelDownsampler::add(const std::vector<Eigen::Vector3f>& points) {
+  if (voxel_m_ <= 0.0) {
+    for (const auto& p : points)
+      if (p.allFinite()) points_.push_back(p);
+    return;
+  }
+  for (const auto& p : points)
+    if (p.allFinite() && seen_.insert(voxelKey(p, voxel_m_)).second) points_.push_back(p);
+}
+
+void VoxelDownsampler::clear() {
+  seen_.clear();
+  points_.clear();
+}
+
 std::string toString(IcpMethod method) {
   return method == IcpMethod::point_to_plane ? "point_to_plane" : "point_to_point";
 }

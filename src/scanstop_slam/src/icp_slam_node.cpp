@@ -149,6 +149,7 @@ class IcpSlamNode {
     }
     timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { publishTf(false); });
     path_.header.frame_id = map_frame_;
+    rebuildMapCloud();  // a resumed map's points
     if (const MapDirectory* dir = slam_->mapDirectory()) {
       for (const MapScanInfo& s : dir->scans())
         path_.poses.push_back(ros_conv::toPoseStamped(s.map_pose, map_frame_, ros::Time(s.stamp_s)));
@@ -171,10 +172,25 @@ class IcpSlamNode {
     tf_.sendTransform(ros_conv::toTransformMsg(slam_->mapFromOdom(), map_frame_, odom_frame_, now));
   }
 
+  /// Adds points (map frame) to slam/map_cloud's cloud: below map_cloud_max_z_m (the ceiling cut
+  /// away for the view), one per map_cloud_voxel_m voxel.
+  void addToMapCloud(const std::vector<Eigen::Vector3f>& points) {
+    std::vector<Eigen::Vector3f> below;
+    below.reserve(points.size());
+    for (const Eigen::Vector3f& p : points)
+      if (p.z() <= map_cloud_max_z_m_) below.push_back(p);
+    map_cloud_.add(below);
+  }
+
+  /// slam/map_cloud's cloud anew from the whole map (at start, and when the relaxation moved poses).
+  void rebuildMapCloud() {
+    map_cloud_ = VoxelDownsampler(map_cloud_voxel_m_);
+    addToMapCloud(slam_->map().points());
+  }
+
   void publishMap(const ros::Time& stamp) {
     PointCloud cloud;
-    for (const Eigen::Vector3f& p : voxelDownsample(slam_->map().points(), map_cloud_voxel_m_))
-      if (p.z() <= map_cloud_max_z_m_) cloud.points.push_back(p);  // the ceiling cut away for the view
+    cloud.points = map_cloud_.points();
     cloud.setUnorganized();
     map_pub_.publish(ros_conv::toMsg(cloud, map_frame_, stamp));
     path_.header.stamp = stamp;
@@ -330,9 +346,15 @@ class IcpSlamNode {
     out.sensor_origin.x = origin.x();
     out.sensor_origin.y = origin.y();
     out.sensor_origin.z = origin.z();
-    out.cloud = ros_conv::toMsg(transformCloud(removeNonFinite(scan), r.map_pose.toIsometry3f()), map_frame_, stamp);
+    const PointCloud in_map = transformCloud(removeNonFinite(scan), r.map_pose.toIsometry3f());
+    out.cloud = ros_conv::toMsg(in_map, map_frame_, stamp);
     out.registration_ok = r.converged;
     scan_pub_.publish(out);
+    // The map's view grows by this scan; after a relaxation every earlier scan moved too.
+    if (r.relaxed)
+      rebuildMapCloud();
+    else
+      addToMapCloud(in_map.points);
     publishMap(stamp);
     return true;
   }
@@ -341,7 +363,8 @@ class IcpSlamNode {
   std::mutex mutex_;
   int max_cloud_points_ = 5000000;
   double map_cloud_voxel_m_ = 0.05;
-  double map_cloud_max_z_m_ = 2.0;  ///< [m] slam/map_cloud leaves out points above (the ceiling hides the room)
+  VoxelDownsampler map_cloud_{0.05};  ///< slam/map_cloud's points (map frame)
+  double map_cloud_max_z_m_ = 2.0;    ///< [m] slam/map_cloud leaves out points above (the ceiling hides the room)
   double sensor_height_m_ = 0.45;
   std::string map_frame_ = "map", odom_frame_ = "odom", base_frame_ = "base_link";
   ros::Publisher pose_pub_, path_pub_, scan_pub_, map_pub_;

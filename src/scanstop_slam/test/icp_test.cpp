@@ -1409,6 +1409,30 @@ TEST(VoxelCentroids, OnePointPerVoxelAtTheMeanOfItsPoints) {
   EXPECT_EQ(f[0], pts[0]);
 }
 
+TEST(VoxelDownsampler, GrownInPiecesEqualsDownsamplingEverythingAtOnce) {
+  // Random points in a 2 m cube, added in uneven pieces (one empty, one with NaN points).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Eigen::Vector3f> all;
+  for (int i = 0; i < 20000; ++i) all.emplace_back(u(rng), u(rng), u(rng));
+  all[17] = Eigen::Vector3f(std::numeric_limits<float>::quiet_NaN(), 0, 0);
+  for (const double voxel : {0.0, 0.05, 0.3}) {
+    VoxelDownsampler grown(voxel);
+    size_t begin = 0;
+    for (const size_t end : {size_t{0}, size_t{10}, size_t{7000}, size_t{7000}, size_t{15000}, all.size()}) {
+      grown.add(std::vector<Eigen::Vector3f>(all.begin() + begin, all.begin() + end));
+      begin = end;
+    }
+    const std::vector<Eigen::Vector3f> once = voxelDownsample(all, voxel);
+    EXPECT_EQ(grown.points(), once) << "voxel " << voxel;
+    EXPECT_LT(once.size(), voxel > 0.2 ? 600u : all.size());  // at most 8^3 voxels of 0.3 m
+    grown.clear();
+    EXPECT_TRUE(grown.points().empty());
+    grown.add(all);  // after clear() every voxel is free again
+    EXPECT_EQ(grown.points(), once);
+  }
+}
+
 /// A SLAM of `config` that maps `first` (world points, the first scan at the origin), then registers
 /// `second_world` (world points) seen from `truth` with odometry `odom`: the second registration.
 Registration registerSecondScan(const SlamConfig& config, const std::vector<Eigen::Vector3f>& first,

@@ -24,6 +24,7 @@ from geometry_msgs.msg import PoseStamped, Quaternion
 from nav_msgs.msg import Odometry
 from scanstop_msgs.srv import RegisterScan, RegisterScanRequest
 from sensor_msgs import point_cloud2
+from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header
 
 TRUTH = [(0.0, 0.0, 0.0), (0.8, 0.3, 0.2), (1.5, -0.4, -0.3), (0.4, 0.9, 1.0)]
@@ -121,6 +122,9 @@ class ReplayTest(unittest.TestCase):
             online.append((res.map_pose.pose.position.x, res.map_pose.pose.position.y,
                            2 * math.atan2(q.z, q.w), res.iterations))
 
+        # slam/map_cloud (grown by each scan): the 5 cm voxels of every scan at its pose, up to 2 m high.
+        self.check_map_cloud(scans, online)
+
         # Offline: replay.launch plays the bag into its own icp_slam_node.
         map_dir = os.path.join(self.tmp, "map")
         poses = os.path.join(map_dir, "poses.csv")
@@ -161,6 +165,33 @@ class ReplayTest(unittest.TestCase):
             # And it is a correction: near the truth where odometry is off.
             self.assertLess(math.hypot(mx - TRUTH[i][0], my - TRUTH[i][1]), 0.01, "scan %d" % i)
         self.assertGreater(math.hypot(odom[3][0] - TRUTH[3][0], odom[3][1] - TRUTH[3][1]), 0.03)  # odometry alone: 4.9 cm off
+
+    def check_map_cloud(self, scans, online):
+        got = {}
+        sub = rospy.Subscriber("online/slam/map_cloud", PointCloud2, lambda m: got.__setitem__("cloud", m))
+        deadline = time.time() + 20.0
+        while time.time() < deadline and (
+                "cloud" not in got or got["cloud"].header.stamp != scans[-1].header.stamp):
+            time.sleep(0.1)
+        sub.unregister()
+        self.assertIn("cloud", got, "no slam/map_cloud")
+        self.assertEqual(got["cloud"].header.stamp, scans[-1].header.stamp, "slam/map_cloud is not of the last scan")
+        self.assertEqual(got["cloud"].header.frame_id, "map")
+        cloud = np.array(list(point_cloud2.read_points(got["cloud"], field_names=("x", "y", "z"))))
+        keys = set(map(tuple, np.floor(cloud / 0.05).astype(np.int64)))
+        self.assertEqual(len(keys), len(cloud), "more than one point in a 5 cm voxel")
+        self.assertLessEqual(cloud[:, 2].max(), 2.0, "points above map_cloud_max_z_m")
+        expected = set()
+        for scan, (x, y, yaw, _) in zip(scans, online):
+            base = np.array(list(point_cloud2.read_points(scan, field_names=("x", "y", "z"))))
+            c, s = math.cos(yaw), math.sin(yaw)
+            in_map = base @ np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]]) + np.array([x, y, 0.0])
+            in_map = in_map[in_map[:, 2] <= 2.0]
+            expected |= set(map(tuple, np.floor(in_map / 0.05).astype(np.int64)))
+        differ = len(keys ^ expected)
+        print("slam/map_cloud: %d points, %d voxels expected, %d differ" % (len(cloud), len(expected), differ))
+        # float (node) against double (here) puts a few points on the other side of a voxel boundary
+        self.assertLess(differ, 0.01 * len(expected))
 
 
 if __name__ == "__main__":

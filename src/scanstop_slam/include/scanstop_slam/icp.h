@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 namespace scanstop {
@@ -262,6 +263,25 @@ IcpResult icp(const VoxelMap& target, const std::vector<Eigen::Vector3f>& source
 
 /// Keeps one point per voxel (the first); voxel_m <= 0 returns the finite points unchanged.
 std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>& points, double voxel_m);
+
+/// voxelDownsample() over a cloud that grows: add() keeps each finite point whose voxel holds no
+/// kept point yet, so after any sequence of add()s points() is voxelDownsample() of everything
+/// added, in that order, at a cost proportional to the points added, not to all kept so far
+/// (icp_slam_node's slam/map_cloud: on a 791-scan office floor, 35 M map points, downsampling the
+/// whole map after every scan took 2.4 s).
+class VoxelDownsampler {
+ public:
+  /// voxel_m <= 0 keeps every finite point.
+  explicit VoxelDownsampler(double voxel_m) : voxel_m_(voxel_m) {}
+  void add(const std::vector<Eigen::Vector3f>& points);
+  void clear();
+  const std::vector<Eigen::Vector3f>& points() const { return points_; }
+
+ private:
+  double voxel_m_;
+  std::unordered_set<int64_t> seen_;
+  std::vector<Eigen::Vector3f> points_;
+};
 
 /// One point per voxel: the mean of the voxel's finite points (in the order the voxels were first
 /// hit); voxel_m <= 0 returns the finite points unchanged. Unlike voxelDownsample's first point,
