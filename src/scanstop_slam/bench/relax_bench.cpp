@@ -48,8 +48,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: relax_bench MAP_DIR --truth mission_state.yaml [--start stored|replay] [--scans N]\n"
     "                   [--neighbours N] [--loop-candidates N] [--loop-min-gap N] [--max-distance M]\n"
-    "                   [--loss cauchy|huber|none] [--loss-scale S] [--odometry-edges] [--drop-weak] [--map-edge "
-    "chain|robust|none]\n"
+    "                   [--loss cauchy|huber|none] [--loss-scale S]\n"
     "                   [--lum-voxel M] [--lum-corr M] [--lum-iterations N] [--lum-rounds N] [--skip-bad] [--verbose]\n"
     "  Replays MAP_DIR with the SLAM defaults to build the relaxation's pose graph, then solves it\n"
     "  from the same start poses with ours (Ceres, 3 dof) and PCL's LUM (6 dof) and prints the pose\n"
@@ -171,9 +170,6 @@ int main(int argc, char** argv) {
       .real("--max-distance", relax.relax_max_distance_m, 0.001, 1000.0)
       .real("--loss-scale", relax.graph.loss_scale, 1e-6, 1e6)
       .choice("--loss", relax.graph.loss, {"cauchy", "huber", "none"})
-      .flag("--odometry-edges", relax.relax_odometry_edges)
-      .flag("--drop-weak", relax.relax_drop_weak)
-      .choice("--map-edge", relax.relax_map_edge, {"chain", "robust", "none"})
       .flag("--skip-bad", skip_bad)
       .flag("--verbose", verbose);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
