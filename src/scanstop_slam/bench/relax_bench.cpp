@@ -48,8 +48,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: relax_bench MAP_DIR --truth mission_state.yaml [--start stored|replay] [--scans N]\n"
     "                   [--neighbours N] [--loop-candidates N] [--loop-min-gap N] [--max-distance M]\n"
-    "                   [--loss cauchy|huber|none] [--loss-scale S] [--odometry-edges] [--drop-weak] [--map-edge "
-    "chain|robust|none]\n"
+    "                   [--loss cauchy|huber|none] [--loss-scale S]\n"
     "                   [--lum-voxel M] [--lum-corr M] [--lum-iterations N] [--lum-rounds N] [--skip-bad] [--verbose]\n"
     "  Replays MAP_DIR with the SLAM defaults to build the relaxation's pose graph, then solves it\n"
     "  from the same start poses with ours (Ceres, 3 dof) and PCL's LUM (6 dof) and prints the pose\n"
@@ -171,11 +170,6 @@ int main(int argc, char** argv) {
       .real("--max-distance", relax.relax_max_distance_m, 0.001, 1000.0)
       .real("--loss-scale", relax.graph.loss_scale, 1e-6, 1e6)
       .choice("--loss", relax.graph.loss, {"cauchy", "huber", "none"})
-      .flag("--odometry-edges", relax.relax_odometry_edges)
-      .flag("--drop-weak", relax.relax_drop_weak)
-      .choice("--map-edge", relax.relax_map_edge, {"chain", "robust", "none"})
-      .real("--loop-check", relax.relax_loop_check_m, 0.0, 10.0)
-      .real("--loop-check-tolerance", relax.relax_loop_check_tolerance_m, 1e-6, 1.0)
       .flag("--skip-bad", skip_bad)
       .flag("--verbose", verbose);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
@@ -201,7 +195,6 @@ int main(int argc, char** argv) {
     std::vector<std::optional<Pose2D>> truth;
     std::vector<Pose2D> stored;
     double replay_s = 0.0;
-    size_t ambiguous = 0;  // loop candidates refused by --loop-check
     pcl::VoxelGrid<pcl::PointXYZ> voxel;
     voxel.setLeafSize(static_cast<float>(lum_voxel), static_cast<float>(lum_voxel), static_cast<float>(lum_voxel));
     for (size_t i = 0; i < n; ++i) {
@@ -209,7 +202,6 @@ int main(int argc, char** argv) {
       const PointCloud scan = in.loadScan(i);
       const slam::Registration r = replay.registerScan(scan, info.odom_pose, info.sensor_origin, info.stamp_s);
       replay_s += r.time_s;
-      ambiguous += static_cast<size_t>(r.relax_loops_ambiguous);
       replayed.push_back(r.map_pose);
       stored.push_back(info.map_pose);
       truth.push_back(info.index < truth_by_index.size() ? truth_by_index[info.index] : std::nullopt);
@@ -226,9 +218,6 @@ int main(int argc, char** argv) {
     const std::vector<Pose2D>& start_poses = start == "stored" ? stored : replayed;
     std::printf("relax_bench: %s, %zu scans, %zu edges (%zu loop edges), replay %.1f s; start: %s poses\n",
                 map_dir.c_str(), n, edges.size(), loops, replay_s, start.c_str());
-    if (config.relax_loop_check_m > 0.0)
-      std::printf("  loop check %.2f m: %zu loop candidates refused as ambiguous\n", config.relax_loop_check_m,
-                  ambiguous);
     printError("start poses", start_poses, truth, -1);
 
     // 2a. Ours: the same graph, one solve from the start poses.

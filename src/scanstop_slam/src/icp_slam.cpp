@@ -46,10 +46,6 @@ void SlamConfig::validate() const {
   requireInRange("relax_voxel_m", relax_voxel_m, 0.01, 1.0, "m");
   requireInRange("relax_min_overlap", relax_min_overlap, 0.0, 1.0);
   requireInRange("relax_max_rms_m", relax_max_rms_m, 1e-6, 1.0, "m");
-  if (relax_map_edge != "chain" && relax_map_edge != "robust" && relax_map_edge != "none")
-    throw std::invalid_argument("relax_map_edge must be chain, robust or none, not '" + relax_map_edge + "'");
-  requireInRange("relax_loop_check_m", relax_loop_check_m, 0.0, 10.0, "m");
-  requireInRange("relax_loop_check_tolerance_m", relax_loop_check_tolerance_m, 1e-6, 1.0, "m");
   requireInRange("relax_update_m", relax_update_m, 0.0, 10.0, "m");
   requireInRange("relax_update_rad", relax_update_rad, 0.0, M_PI, "rad");
   graph.validate();
@@ -354,21 +350,6 @@ Registration IcpSlam::registerAgainst(const VoxelMap& target, const PointCloud& 
   return r;
 }
 
-namespace {
-/// information without its say along the (x, y, yaw part of the) weak direction w: P^T I P with
-/// P = 1 - v v^T / (v^T v), so I v = 0, plus 1 / (1 m)^2 along v to keep it positive definite.
-Eigen::Matrix3d withoutWeakDirection(const Eigen::Matrix3d& information, const Eigen::VectorXd& w, bool six_dof) {
-  if (w.size() < 3) return information;
-  const Eigen::Vector3d v(w(0), w(1), w(six_dof && w.size() >= 6 ? 5 : 2));
-  const double n2 = v.squaredNorm();
-  if (!(n2 > 1e-12)) return information;
-  const Eigen::Matrix3d along = v * v.transpose() / n2;
-  const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - along;
-  Eigen::Matrix3d out = P.transpose() * information * P + along;
-  return 0.5 * (out + out.transpose());
-}
-}  // namespace
-
 void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin,
                             Registration& r) const {
   const size_t j = graph.size() - 1;  // the new node
@@ -401,50 +382,17 @@ void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>
     const Pose2D guess = graph.poses()[i].between(pj);
     const IcpResult pair = registerStages(target, points, guess.toIsometry3d(), origin, nullptr);
     if (!pair.converged || pair.overlap < config_.relax_min_overlap || pair.rms_m > config_.relax_max_rms_m) continue;
-    const bool loop_edge = static_cast<long>(r.index) - static_cast<long>(kept_[i].index) >= config_.relax_loop_min_gap;
-    if (loop_edge && config_.relax_loop_check_m > 0.0) {
-      const Pose2D result = Pose2D::fromIsometry3d(pair.T_target_source);
-      bool unambiguous = !pair.degenerate;
-      const double d = config_.relax_loop_check_m;
-      const double shifts[4][2] = {{d, 0}, {-d, 0}, {0, d}, {0, -d}};
-      for (int k = 0; k < 4 && unambiguous; ++k) {
-        const Pose2D shifted(guess.x + shifts[k][0], guess.y + shifts[k][1], guess.yaw);
-        const IcpResult other = registerStages(target, points, shifted.toIsometry3d(), origin, nullptr);
-        const Pose2D o = Pose2D::fromIsometry3d(other.T_target_source);
-        unambiguous =
-            other.converged && std::hypot(o.x - result.x, o.y - result.y) <= config_.relax_loop_check_tolerance_m;
-      }
-      if (!unambiguous) {
-        ++r.relax_loops_ambiguous;
-        continue;
-      }
-    }
     PoseGraphEdge e;
     e.from = i;
     e.to = j;
     e.T_from_to = Pose2D::fromIsometry3d(pair.T_target_source);
     e.information = pairwiseInformation(target, points, pair.T_target_source, config_.icp);
-    if (config_.relax_drop_weak && pair.degenerate)
-      e.information = withoutWeakDirection(e.information, pair.weak_direction, config_.icp.six_dof);
     e.robust = static_cast<long>(r.index) - static_cast<long>(kept_[i].index) >= config_.relax_loop_min_gap;
     graph.addEdge(e);
     ++r.relax_edges;
     if (i + 1 == j) previous_joined = true;
   }
-  bool odometry_joined = false;
-  if (j >= 1 && config_.relax_odometry_edges) {
-    PoseGraphEdge e;
-    e.from = j - 1;
-    e.to = j;
-    e.T_from_to = r.odom_leg;
-    const Eigen::MatrixXd info = priorInformation(r.odom_leg);
-    const int k[3] = {0, 1, config_.icp.six_dof ? 5 : 2};
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) e.information(a, b) = info(k[a], k[b]);
-    graph.addEdge(e);
-    odometry_joined = true;
-  }
-  if (j >= 1 && r.converged && config_.relax_map_edge != "none") {
+  if (j >= 1 && r.converged) {
     // The registration against the map, as an edge from the previous scan: the new scan's pose
     // relative to where the map holds the previous one, with the information of that registration
     // (the same stand-in as pairwise edges, over the map). Pairwise registrations of two sparse
@@ -454,11 +402,8 @@ void IcpSlam::addRelaxEdges(PoseGraph& graph, const std::vector<Eigen::Vector3f>
     e.to = j;
     e.T_from_to = kept_[j - 1].pose.between(pj);
     e.information = pairwiseInformation(map_, points, pj.toIsometry3d(), config_.icp);
-    if (config_.relax_drop_weak && r.degenerate)
-      e.information = withoutWeakDirection(e.information, r.weak_direction, config_.icp.six_dof);
-    e.robust = config_.relax_map_edge == "robust";
     graph.addEdge(e);
-  } else if (!previous_joined && !odometry_joined && j >= 1) {
+  } else if (!previous_joined && j >= 1) {
     // Keeps the chain joined: the relative pose as odometry (the registration failed) left it,
     // weakly (5 cm, 1 deg).
     PoseGraphEdge e;

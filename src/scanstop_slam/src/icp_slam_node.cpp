@@ -102,9 +102,6 @@ class IcpSlamNode {
     optional("relax_update_m", config.relax_update_m);
     params.degrees("relax_update_deg", config.relax_update_rad, 0.0, 180.0);
     optional("relax_loss", config.graph.loss);
-    optional("relax_odometry_edges", config.relax_odometry_edges);
-    optional("relax_drop_weak", config.relax_drop_weak);
-    optional("relax_map_edge", config.relax_map_edge);
     optional("relax_loss_scale", config.graph.loss_scale);
     optional("max_cloud_points", max_cloud_points_);
     optional("map_cloud_voxel_m", map_cloud_voxel_m_);

@@ -47,7 +47,6 @@ constexpr const char* kUsage =
     "                  [--relax-max-distance M] [--relax-voxel M] [--relax-min-overlap F] [--relax-max-rms M]\n"
     "                  [--relax-update M] [--relax-update-deg D] [--relax-loss cauchy|huber|none] [--relax-loss-scale "
     "S]\n"
-    "                  [--relax-odometry-edges] [--relax-drop-weak] [--relax-map-edge chain|robust|none]\n"
     "  --isolated: (with --truth) register every scan alone against the earlier scans at their true\n"
     "              poses, from the true pose of the scan before composed with the odometry leg\n"
     "              (odometry) or from its own true pose (truth), and print each registration's error:\n"
@@ -211,9 +210,6 @@ int main(int argc, char** argv) {
       .real("--relax-update", config.relax_update_m, 0.0, 10.0)
       .real("--relax-update-deg", config.relax_update_rad, 0.0, 180.0, deg)
       .choice("--relax-loss", config.graph.loss, {"cauchy", "huber", "none"})
-      .flag("--relax-odometry-edges", config.relax_odometry_edges)
-      .flag("--relax-drop-weak", config.relax_drop_weak)
-      .choice("--relax-map-edge", config.relax_map_edge, {"chain", "robust", "none"})
       .real("--relax-loss-scale", config.graph.loss_scale, 1e-6, 1e6);
   if (const int rc = opts.parse(argc, argv); rc >= 0) return rc;
   config.icp.six_dof = mode == "6dof";

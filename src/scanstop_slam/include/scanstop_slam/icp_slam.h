@@ -179,27 +179,6 @@ struct SlamConfig {
   double relax_min_overlap = 0.3;
   /// ... and at most this RMS of its correspondences [m], (0, 1]
   double relax_max_rms_m = 0.04;
-  /// An odometry edge between consecutive scans: the guess's leg (odometry with the estimated scale and
-  /// turn) with the information of the odometry error model (prior_sigma_*), so that the chain
-  /// holds where the registrations are weak or wrong.
-  bool relax_odometry_edges = false;
-  /// The registration against the map as an edge from the previous scan: "chain" (plain least
-  /// squares), "robust" (through the loop edges' robust loss, so a wrong registration that the
-  /// other edges contradict weighs less) or "none" (not an edge; then the chain is the pairwise and
-  /// odometry edges).
-  std::string relax_map_edge = "chain";
-  /// An edge from a degenerate registration (pairwise or against the map; condition beyond
-  /// degeneracy_ratio) does not constrain its weakest direction: there its measurement is the
-  /// guess the remap kept, i.e. the graph's own (drifted) relative pose, not a measurement. Its
-  /// information along that direction is replaced by 1 / (1 m)^2; the odometry edges
-  /// (relax_odometry_edges) then carry it.
-  bool relax_drop_weak = false;
-  /// A loop edge counts only when the pairwise registration is unambiguous: started again from the
-  /// guess shifted by this distance along +-x and +-y (the earlier scan's frame), every run converges
-  /// within relax_loop_check_tolerance_m of the first result (a neighbouring look-alike office or a
-  /// stretch of corridor pulls a shifted start elsewhere) [m], [0, 10]; 0: no check
-  double relax_loop_check_m = 0.0;
-  double relax_loop_check_tolerance_m = 0.02;  ///< [m], (0, 1]
   /// Apply the relaxation (rewrite poses, rebuild the map) when a pose moves farther than this from
   /// where the map holds it [m], [0, 10]; [rad], [0, pi]
   double relax_update_m = 0.01;
@@ -253,7 +232,6 @@ struct Registration {
   /// graph was solved, and whether the result was applied (poses rewritten, map rebuilt).
   int relax_edges_tried = 0;
   int relax_edges = 0;
-  int relax_loops_ambiguous = 0;  ///< loop candidates refused by relax_loop_check_m
   bool relax_solved = false;
   bool relaxed = false;
   /// Applied: earlier scans whose pose changed, and the largest change [m], [rad]. map_pose is
