@@ -419,11 +419,6 @@ void VoxelDownsampler::add(const std::vector<Eigen::Vector3f>& points) {
     if (p.allFinite() && seen_.insert(voxelKey(p, voxel_m_)).second) points_.push_back(p);
 }
 
-void VoxelDownsampler::clear() {
-  seen_.clear();
-  points_.clear();
-}
-
 std::string toString(IcpMethod method) {
   return method == IcpMethod::point_to_plane ? "point_to_plane" : "point_to_point";
 }

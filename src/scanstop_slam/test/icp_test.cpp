@@ -1426,10 +1426,6 @@ TEST(VoxelDownsampler, GrownInPiecesEqualsDownsamplingEverythingAtOnce) {
     const std::vector<Eigen::Vector3f> once = voxelDownsample(all, voxel);
     EXPECT_EQ(grown.points(), once) << "voxel " << voxel;
     EXPECT_LT(once.size(), voxel > 0.2 ? 600u : all.size());  // at most 8^3 voxels of 0.3 m
-    grown.clear();
-    EXPECT_TRUE(grown.points().empty());
-    grown.add(all);  // after clear() every voxel is free again
-    EXPECT_EQ(grown.points(), once);
   }
 }
 

@@ -274,7 +274,6 @@ class VoxelDownsampler {
   /// voxel_m <= 0 keeps every finite point.
   explicit VoxelDownsampler(double voxel_m) : voxel_m_(voxel_m) {}
   void add(const std::vector<Eigen::Vector3f>& points);
-  void clear();
   const std::vector<Eigen::Vector3f>& points() const { return points_; }
 
  private:
