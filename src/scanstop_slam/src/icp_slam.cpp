@@ -454,13 +454,17 @@ std::string IcpSlam::odomProblem(const Pose2D& odom_pose) const {
   return "";
 }
 
+bool IcpSlam::scaleEvidence(size_t i) const {
+  return kept_[i].scale_evidence && (!config_.odom_scale_both_ends || kept_[i - 1].scale_evidence);
+}
+
 double IcpSlam::odomScale() const {
   // Least squares k = sum(l o) / sum(o^2): o the odometry's translation of a leg, l the registered
   // translation projected onto the odometry's direction.
   double lo = 0.0, oo = 0.0;
   int legs = 0;
   for (size_t i = 1; i < kept_.size(); ++i) {
-    if (!kept_[i].scale_evidence) continue;
+    if (!scaleEvidence(i)) continue;
     const Pose2D o = kept_[i - 1].odom.between(kept_[i].odom);
     const double len = std::hypot(o.x, o.y);
     if (len < config_.odom_scale_min_travel_m) continue;
@@ -478,7 +482,7 @@ std::pair<double, double> IcpSlam::odomTurn() const {
   double s_oo = 0.0, s_o = 0.0, s_mo = 0.0, s_m = 0.0, turned = 0.0;
   int legs = 0;
   for (size_t i = 1; i < kept_.size(); ++i) {
-    if (!kept_[i].scale_evidence) continue;
+    if (!scaleEvidence(i)) continue;
     const Pose2D o = kept_[i - 1].odom.between(kept_[i].odom);
     if (std::hypot(o.x, o.y) < config_.odom_scale_min_travel_m) continue;
     const Pose2D m = kept_[i - 1].pose.between(kept_[i].pose);

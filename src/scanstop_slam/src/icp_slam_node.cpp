@@ -73,6 +73,7 @@ class IcpSlamNode {
     optional("source_centroids", config.source_centroids);
     optional("odom_scale_estimation", config.odom_scale_estimation);
     optional("odom_scale_min_travel_m", config.odom_scale_min_travel_m);
+    optional("odom_scale_both_ends", config.odom_scale_both_ends);
     optional("odom_turn_estimation", config.odom_turn_estimation);
     optional("odom_turn_min_total_rad", config.odom_turn_min_total_rad);
     optional("max_points_per_voxel", config.max_points_per_voxel);

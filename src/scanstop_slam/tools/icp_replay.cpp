@@ -28,7 +28,7 @@ constexpr const char* kUsage =
     "usage: icp_replay MAP_DIR [--out DIR] [--truth mission_state.yaml] [--mode 3dof|6dof] [--skip-bad]\n"
     "                  [--method point_to_point|point_to_plane] [--source-centroids | --no-source-centroids]\n"
     "                  [--degeneracy-ratio R] [--no-remap] [--no-odom-scale] [--no-odom-turn]\n"
-    "                  [--odom-scale-min-travel M]\n"
+    "                  [--odom-scale-min-travel M] [--odom-scale-later-end]\n"
     "                  [--coarse-point-to-plane] [--isolated odometry|truth [--from N]]\n"
     "                  [--odometry-prior | --no-odometry-prior] [--prior-sigma M] [--prior-sigma-per-m F] "
     "[--prior-sigma-deg D]\n"
@@ -179,6 +179,7 @@ int main(int argc, char** argv) {
       .flag("--no-odom-turn", config.odom_turn_estimation, false)
       .flag("--coarse-point-to-plane", config.coarse_point_to_point, false)
       .real("--odom-scale-min-travel", config.odom_scale_min_travel_m, 0.01, 100.0)
+      .flag("--odom-scale-later-end", config.odom_scale_both_ends, false)
       .flag("--skip-bad", skip_bad)
       .real("--c-max", config.icp.c_max_m, 0.001, 5.0)
       .real("--coarse-c-max", config.coarse_c_max_m, 0.0, 5.0)

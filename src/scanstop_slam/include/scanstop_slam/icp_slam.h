@@ -84,6 +84,14 @@ struct SlamConfig {
   /// so an odometry that reads 3 % long (the thesis profile) otherwise drifts 3 cm per metre there.
   bool odom_scale_estimation = true;
   double odom_scale_min_travel_m = 0.3;  ///< [m], [0.01, 100]
+  /// A leg tells the odometry scale and turn (odom_turn_estimation) only when the registrations at
+  /// both of its ends are evidence (converged, not degenerate), not only the later one: a leg that
+  /// starts at a degenerate scan (held at its guess along a corridor's axis, off by the scale's own
+  /// error) carries that scan's error into the estimate, which then drives the next degenerate
+  /// scans the same way (corridor seed 2: scale 1.036-1.039 for the true 1.030, 1-4 cm along the
+  /// axis per degenerate scan; replay ATE RMS / max 7.8 / 12.5 -> 6.6 / 10.6 cm). false: the
+  /// later end alone (the rule before 2026-12-08).
+  bool odom_scale_both_ends = true;
   /// Odometry turn calibration: the guess's yaw since the last scan is k * yaw + b (b once per leg
   /// of at least odom_scale_min_travel_m: the turn a forward motion ends with, its curvature) and
   /// its translation turns by (k - 1) * yaw (the robot turned that much more or less before it
@@ -370,6 +378,9 @@ class IcpSlam {
     Pose2D odom;                                       ///< its odometry pose
     bool scale_evidence = true;  ///< converged and not degenerate: its leg tells the odometry scale
   };
+  /// Whether the leg from kept scan i - 1 to i (i >= 1) tells the odometry scale and turn
+  /// (SlamConfig::odom_scale_both_ends).
+  bool scaleEvidence(size_t i) const;
   /// SlamConfig::odom_scale_estimation's factor from the kept scans' legs (1 without evidence).
   double odomScale() const;
   /// SlamConfig::odom_turn_estimation's k and b from the kept scans' legs ({1, 0} without evidence).
