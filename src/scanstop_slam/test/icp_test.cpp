@@ -59,6 +59,21 @@ std::vector<Eigen::Vector3f> transformed(const std::vector<Eigen::Vector3f>& pts
   return out;
 }
 
+/// The world's points as a scan (base_link frame, unorganized) taken at pose.
+PointCloud scanFrom(const std::vector<Eigen::Vector3f>& world, const Pose2D& pose) {
+  PointCloud scan;
+  scan.points = transformed(world, pose.toIsometry3d().inverse());
+  scan.setUnorganized();
+  return scan;
+}
+
+/// The odometry of the motion from one true pose to the next when it reads `scale` times the
+/// distance driven and `extra_yaw` [rad] more turn.
+Pose2D odometryStep(const Pose2D& from, const Pose2D& to, double scale, double extra_yaw = 0.0) {
+  const Pose2D step = from.between(to);
+  return Pose2D(step.x * scale, step.y * scale, step.yaw + extra_yaw);
+}
+
 Eigen::Isometry3d pose(double x, double y, double z, double roll, double pitch, double yaw) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
@@ -622,13 +637,8 @@ TEST(IcpSlam, CorrectsOdometryDriftAndPersistsTheMap) {
     Pose2D odom;
     for (size_t i = 0; i < truth.size(); ++i) {
       // Each scan sees the room from its true pose; odometry drifts (5 % scale, 2 deg per step).
-      PointCloud scan;
-      scan.points = transformed(world, truth[i].toIsometry3d().inverse());
-      scan.setUnorganized();
-      if (i > 0) {
-        const Pose2D step = truth[i - 1].between(truth[i]);
-        odom = odom * Pose2D(step.x * 1.05, step.y * 1.05, step.yaw + 2.0 * M_PI / 180);
-      }
+      const PointCloud scan = scanFrom(world, truth[i]);
+      if (i > 0) odom = odom * odometryStep(truth[i - 1], truth[i], 1.05, 2.0 * M_PI / 180);
       const Registration r = slam.registerScan(scan, odom, Eigen::Vector3d(0, 0, 0.45), i * 40.0);
       ASSERT_TRUE(r.converged) << "scan " << i << ": " << r.failure;
       EXPECT_LT(std::hypot(r.map_pose.x - truth[i].x, r.map_pose.y - truth[i].y), 0.005) << "scan " << i;
@@ -690,15 +700,10 @@ TEST(IcpSlam, RelaxationAddsPairwiseEdgesRewritesPosesAndResumesWithThem) {
     Pose2D odom;
     int applied = 0;
     for (size_t i = 0; i < truth.size(); ++i) {
-      PointCloud scan;
-      scan.points = transformed(world, truth[i].toIsometry3d().inverse());
+      PointCloud scan = scanFrom(world, truth[i]);
       std::normal_distribution<float> noise(0.0f, 0.003f);
       for (auto& q : scan.points) q += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
-      scan.setUnorganized();
-      if (i > 0) {
-        const Pose2D step = truth[i - 1].between(truth[i]);
-        odom = odom * Pose2D(step.x * 1.05, step.y * 1.05, step.yaw + 2.0 * M_PI / 180);
-      }
+      if (i > 0) odom = odom * odometryStep(truth[i - 1], truth[i], 1.05, 2.0 * M_PI / 180);
       const Registration r = slam.registerScan(scan, odom, Eigen::Vector3d(0, 0, 0.45), i * 40.0);
       ASSERT_TRUE(r.converged) << "scan " << i << ": " << r.failure;
       EXPECT_TRUE(r.relax_solved) << "scan " << i << ": " << r.relax_problem;
@@ -1320,13 +1325,8 @@ TEST(IcpSlam, EstimatesTheOdometryScaleFromRegisteredLegs) {
     IcpSlam slam(config, "");
     Pose2D odom = truth[0];
     for (size_t i = 0; i < truth.size(); ++i) {
-      PointCloud scan;
-      scan.points = transformed(world, truth[i].toIsometry3d().inverse());
-      scan.setUnorganized();
-      if (i > 0) {
-        const Pose2D step = truth[i - 1].between(truth[i]);
-        odom = odom * Pose2D(step.x * 1.05, step.y * 1.05, step.yaw);
-      }
+      const PointCloud scan = scanFrom(world, truth[i]);
+      if (i > 0) odom = odom * odometryStep(truth[i - 1], truth[i], 1.05);
       const Registration r = slam.registerScan(scan, odom, Eigen::Vector3d(0, 0, 0.45), i * 40.0);
       ASSERT_TRUE(r.converged) << r.failure;
       const double guess_err = std::hypot(r.guess.x - truth[i].x, r.guess.y - truth[i].y);
@@ -1366,13 +1366,8 @@ TEST(IcpSlam, TheOdometryScaleIgnoresLegsFromADegenerateScan) {
     Pose2D odom = truth[0];
     double scale = 1.0;
     for (size_t i = 0; i < truth.size(); ++i) {
-      PointCloud scan;
-      scan.points = transformed(i == corridor_scan ? walls : world, truth[i].toIsometry3d().inverse());
-      scan.setUnorganized();
-      if (i > 0) {
-        const Pose2D step = truth[i - 1].between(truth[i]);
-        odom = odom * Pose2D(step.x * 1.05, step.y * 1.05, step.yaw);
-      }
+      const PointCloud scan = scanFrom(i == corridor_scan ? walls : world, truth[i]);
+      if (i > 0) odom = odom * odometryStep(truth[i - 1], truth[i], 1.05);
       const Registration r = slam.registerScan(scan, odom, Eigen::Vector3d(0, 0, 0.45), i * 40.0);
       ASSERT_TRUE(r.converged) << r.failure;
       EXPECT_EQ(r.degenerate, i == corridor_scan) << "scan " << i << ", condition " << r.condition;

@@ -78,10 +78,10 @@ struct SlamConfig {
   double map_spacing_m = 0.0;     ///< a map point joins only if none of its voxel is closer [m] (0 = first come)
   /// Odometry scale: the initial guess scales the odometry's translation since the last scan by
   /// the factor that maps the odometry's earlier legs onto the registered ones (least squares over
-  /// every converged, not degenerate registration after at least odom_scale_min_travel_m of
-  /// odometry travel; 1 until two such legs exist; clamped to [0.8, 1.25]). Where a registration
-  /// is degenerate (a corridor along its axis) the guess is what stands along the weak direction,
-  /// so an odometry that reads 3 % long (the thesis profile) otherwise drifts 3 cm per metre there.
+  /// every converged, not degenerate registration (odom_scale_both_ends: at both ends of the leg) after at least
+  /// odom_scale_min_travel_m of odometry travel; 1 until two such legs exist; clamped to [0.8, 1.25]). Where a
+  /// registration is degenerate (a corridor along its axis) the guess is what stands along the weak direction, so an
+  /// odometry that reads 3 % long (the thesis profile) otherwise drifts 3 cm per metre there.
   bool odom_scale_estimation = true;
   double odom_scale_min_travel_m = 0.3;  ///< [m], [0.01, 100]
   /// A leg tells the odometry scale and turn (odom_turn_estimation) only when the registrations at
@@ -376,7 +376,9 @@ class IcpSlam {
     std::vector<Eigen::Vector3f> points;               ///< relax_voxel_m-downsampled, base_link (relax only)
     Eigen::Vector3f origin = Eigen::Vector3f::Zero();  ///< sensor origin in base_link
     Pose2D odom;                                       ///< its odometry pose
-    bool scale_evidence = true;  ///< converged and not degenerate: its leg tells the odometry scale
+    /// converged and not degenerate: the legs it ends (and, with odom_scale_both_ends, starts) tell
+    /// the odometry scale and turn
+    bool scale_evidence = true;
   };
   /// Whether the leg from kept scan i - 1 to i (i >= 1) tells the odometry scale and turn
   /// (SlamConfig::odom_scale_both_ends).
